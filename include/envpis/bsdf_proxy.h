@@ -1,0 +1,98 @@
+// The BSDF proxy of Conty Estevez & Lecocq (2018), section 3: seven floats that summarize a
+// multi-lobe BSDF for shaping the light-sampling distribution (never for shading).
+//
+// Almost every lobe of a production BSDF revolves around one of four axes, all implied by the
+// shading normal N and the outgoing direction wo: N (diffuse), -N (translucent), the mirror direction
+// R (glossy reflection) and the refracted direction T (glossy transmission). The proxy keeps a weight
+// per axis, the weight-averaged GGX roughness of the reflection and refraction lobes, and the IOR.
+//
+// "Roughness" here is the GGX alpha (no squaring remap): alpha = 0 is a mirror, alpha = 1 very rough.
+//
+// Lobe shapes, evaluated at an incoming direction wi whose angle to the lobe axis is t:
+//   diffuse      w_d / pi * max(0, cos t)         around  N      (only for wi above the surface)
+//   translucent  w_t / pi * max(0, cos t)         around -N      (only for wi below the surface)
+//   reflection   w_r * D(cos t, a_r')             around  R      (only for wi above the surface)
+//   refraction   w_T * D(cos t, a_t')             around  T      (only for wi below the surface)
+// with the simplified GGX D(c, a) = a^2 / (pi (1 + (a^2 - 1) c^2)^2) for c > 0 (0 otherwise), which is
+// the paper's w / (a^2 (cos^2 t + sin^2 t / a^2)^2) with the 1/pi that makes its peak 1/(pi a^2) match
+// GGX's and keeps its scale consistent with the diffuse 1/pi.
+//
+// The roughnesses are transformed once per shading point (the half-vector to incoming-direction
+// change of variables widens the lobe). The talk's abstract and the authors' slides differ:
+//   Slides   (default): a_r' = 2 a_r,               a_t' = a_t (cos_t + eta cos_o) / cos_t
+//   Abstract:           a_r' = a_r sqrt(4 cos_o),   a_t' = a_t (cos_t eta + cos_o) / sqrt(cos_t eta^2)
+// where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is the one
+// that measured better (see docs/proxy.md and tests/test_bsdf_proxy.cpp). Then a' is clamped to
+// [min_alpha, 1]: the floor is the low-roughness remedy of DESIGN.md section 8 (a near-mirror lobe
+// gives its peak value to every cell its axis touches and starves the cells reached only by its tail),
+// and above 1 the GGX shape stops being a lobe (it would peak at the horizon).
+//
+// Special cases (all handled inside prepare_proxy):
+//   - wo below the surface (N.wo < 0): N is flipped and eta inverted, so the proxy describes the
+//     BSDF seen from wo's side.
+//   - total internal reflection (no refracted direction): the refraction weight and roughness are
+//     folded into the reflection lobe, where the energy goes.
+//   - roughness 0: allowed; the floor (or a minimum of 1e-3 when the floor is 0) keeps the lobe finite.
+//   - IOR: any positive value; IOR 1 refracts straight through (T = -wo); below 1 is a valid ratio
+//     (e.g. leaving glass); NaN, 0 or negative is treated as 1.
+//   - an all-zero proxy, or a zero/NaN normal or wo: prepare_proxy returns a proxy with valid() false.
+//   - shading normals that diverge from the proxy's normal: widen the lobe's roughness with
+//     widen_roughness() before adding it.
+#pragma once
+
+#include "envpis/common.h"
+
+namespace envpis {
+
+enum class RoughnessTransform { Slides, Abstract };
+RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract"
+const char* to_string(RoughnessTransform t);
+
+struct ProxyOptions {
+  RoughnessTransform transform = RoughnessTransform::Slides;
+  float min_alpha = 0.35f;  ///< floor on the transformed roughness a' (0 disables)
+};
+
+/// The seven floats. Accumulate lobes with the add_* calls (weights are the lobes' albedos or any
+/// consistent measure of their energy; roughness and IOR become weight-averaged).
+struct BsdfProxy {
+  float diffuse = 0;
+  float translucent = 0;
+  float reflection = 0;
+  float refraction = 0;
+  float alpha_reflection = 0;
+  float alpha_refraction = 0;
+  float ior = 1;
+
+  void add_diffuse(float weight);
+  void add_translucent(float weight);
+  void add_reflection(float weight, float alpha);
+  void add_refraction(float weight, float alpha, float ior);
+  bool is_zero() const { return !(diffuse > 0 || translucent > 0 || reflection > 0 || refraction > 0); }
+};
+
+/// Roughness widened for a lobe whose own normal makes angle t_d (cos t_d = cos_divergence) with the
+/// proxy's normal: sqrt(tan^2(t_d) / 8 + alpha^2) (GGX truncated to 95% of its mass has variance about
+/// 2 alpha^2). cos_divergence <= 0 gives 1.
+float widen_roughness(float alpha, float cos_divergence);
+
+/// The proxy made concrete for one shading point: unit axes and transformed roughnesses.
+struct PreparedProxy {
+  Vec3 n, r, t;                   ///< unit axes (n flipped towards wo)
+  float kd = 0, kt = 0;           ///< diffuse / translucent coefficients (w / pi)
+  float wr = 0, wt = 0;           ///< reflection / refraction weights
+  float alpha_r = 1, alpha_t = 1; ///< transformed roughness
+  float eta = 1;                  ///< IOR seen from wo's side
+  bool tir = false;               ///< total internal reflection happened
+  bool ok = false;
+
+  bool valid() const { return ok; }
+  /// Proxy value for incoming direction wi (unit).
+  float eval(Vec3 wi) const;
+  /// Proxy value at the direction of the cone closest to each lobe axis (the paper's cell estimate).
+  float eval_cone(Vec3 axis, float cos_half_angle, float sin_half_angle) const;
+};
+
+PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const ProxyOptions& options = {});
+
+}  // namespace envpis

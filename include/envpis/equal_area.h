@@ -1,0 +1,48 @@
+// Clarberg's equal-area mapping between the unit square [0,1]^2 and the unit sphere
+// (P. Clarberg, "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD", JGT 13(3), 2008).
+//
+// The square is folded like an octahedron: the diamond |2x-1| + |2y-1| <= 1 maps to the upper
+// hemisphere (z >= 0, north pole at the square's centre), the four corner triangles to the lower
+// hemisphere (south pole at the four corners). Every region of the square maps to a region of the
+// sphere with 4*pi times its area, so a density over the square converts to a density over solid
+// angle by a constant: pdf_solid_angle = pdf_square / (4*pi).
+//
+// Edges wrap with a mirror: the point (0, y) touches (0, 1 - y) on the sphere, and likewise for the
+// other three edges; see equal_area_wrap().
+#pragma once
+
+#include <cstddef>
+
+#include "envpis/common.h"
+
+namespace envpis {
+
+/// Density over solid angle of a uniform density over the unit square: 1 / (4 pi).
+constexpr float kEqualAreaPdf = kInv4Pi;
+
+/// Square [0,1]^2 -> unit direction. Inputs outside [0,1] are clamped.
+Vec3 equal_area_square_to_sphere(Point2 p);
+
+/// Unit direction -> square [0,1]^2. The direction need not be normalized, but must be non-zero.
+Point2 equal_area_sphere_to_square(Vec3 d);
+
+/// Wraps integer texel coordinates of an n x n equal-area image so that neighbours across an edge
+/// of the square are the texels that are neighbours on the sphere. Returns false if (x, y) is more
+/// than one image width outside (the caller clamps then).
+bool equal_area_wrap(int n, int& x, int& y);
+
+/// Batched (structure-of-arrays) versions, vectorized with the widest SIMD unit the CPU has
+/// (AVX2+FMA, else SSE2, else scalar; chosen once at run time). Arrays may alias neither each other
+/// nor be misaligned-sensitive: any alignment works.
+void equal_area_square_to_sphere(std::size_t n, const float* u, const float* v, float* x, float* y,
+                                 float* z);
+void equal_area_sphere_to_square(std::size_t n, const float* x, const float* y, const float* z, float* u,
+                                 float* v);
+
+/// Name and lane count of the SIMD path the batched functions and the product sampler use
+/// ("avx2" / 8, "sse2" / 4 or "scalar" / 1). ENVPIS_SIMD=scalar|sse2|avx2 in the environment
+/// forces a lower one (for benchmarking and debugging).
+const char* simd_name();
+int simd_width();
+
+}  // namespace envpis

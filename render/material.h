@@ -1,0 +1,78 @@
+// The renderer's materials: weighted sums of lobes, each with eval / sample / pdf, evaluated in the
+// local shading frame (normal = +Z), plus accumulation into the library's BsdfProxy.
+//
+// Conventions (pbrt-like): wo and wi point away from the surface; eval() returns the BSDF value f
+// (NOT multiplied by |cos theta_i|); pdf() is per unit solid angle of wi; sample() returns f, wi, pdf
+// and weight = f * |cos theta_i| / pdf. Directions are unit vectors in the local frame.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "envpis/envpis.h"
+
+namespace envpis::render {
+
+struct BsdfSample {
+  Rgb f;          ///< BSDF value
+  Vec3 wi;        ///< sampled incoming direction (local frame)
+  float pdf = 0;  ///< solid-angle density of the whole material's sampling of wi
+  Rgb weight;     ///< f * |cos theta_i| / pdf
+  bool transmission = false;
+};
+
+/// One lobe. Implementations live in render/materials/, one file per lobe.
+class Lobe {
+ public:
+  virtual ~Lobe() = default;
+  virtual Rgb eval(Vec3 wo, Vec3 wi) const = 0;
+  virtual float pdf(Vec3 wo, Vec3 wi) const = 0;
+  /// u: 2D sample, uc: a further 1D sample (e.g. reflect vs refract). nullopt when sampling fails.
+  virtual std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const = 0;
+  /// Directional albedo estimate used to pick this lobe in a mixture and as its proxy weight.
+  virtual float albedo(Vec3 wo) const = 0;
+  /// Adds this lobe (scaled by `weight`) to the proxy as the paper describes.
+  virtual void add_to_proxy(BsdfProxy& proxy, Vec3 wo, float weight) const = 0;
+  virtual std::string name() const = 0;
+};
+
+/// A material: sum of weighted lobes. eval sums the lobes; sample picks a lobe with probability
+/// proportional to weight * albedo(wo) and returns the mixture pdf (one-sample MIS over lobes).
+class Material {
+ public:
+  void add(std::shared_ptr<const Lobe> lobe, float weight = 1.0f);
+  Rgb eval(Vec3 wo, Vec3 wi) const;
+  float pdf(Vec3 wo, Vec3 wi) const;
+  std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const;
+  /// Fills the proxy for outgoing direction wo (local frame). The caller calls
+  /// ProductSampler::prepare(normal, wo_world, proxy) with the same normal the frame uses.
+  void fill_proxy(BsdfProxy& proxy, Vec3 wo) const;
+  const std::string& name() const { return name_; }
+  void set_name(std::string n) { name_ = std::move(n); }
+  bool empty() const { return lobes_.empty(); }
+
+ private:
+  struct Entry {
+    std::shared_ptr<const Lobe> lobe;
+    float weight;
+  };
+  std::vector<Entry> lobes_;
+  std::string name_;
+};
+
+// ---- factories (render/materials/*.cpp) ----
+std::shared_ptr<const Lobe> make_lambert(Rgb albedo);
+std::shared_ptr<const Lobe> make_translucent(Rgb transmittance);
+/// GGX conductor, Fresnel from a complex IOR (eta + i k per channel)...
+std::shared_ptr<const Lobe> make_conductor(float alpha, Rgb eta, Rgb k);
+/// ...or from an RGB reflectance at normal incidence (Schlick).
+std::shared_ptr<const Lobe> make_conductor_reflectance(float alpha, Rgb f0);
+/// GGX rough dielectric (Walter et al. 2007): reflection + refraction. eta = n_inside / n_outside;
+/// the normal points outside.
+std::shared_ptr<const Lobe> make_dielectric(float alpha, float eta, Rgb tint = {1, 1, 1});
+/// Dielectric coat (GGX, alpha, eta) over a Lambert base.
+std::shared_ptr<const Lobe> make_coated_diffuse(Rgb base, float alpha, float eta);
+
+}  // namespace envpis::render

@@ -1,0 +1,122 @@
+#include "envpis/bsdf_proxy.h"
+
+#include <algorithm>
+#include <cmath>
+
+#define ENVPIS_KERNEL_NS scalar
+#include "kernels_impl.inl"
+#include "proxy_internal.h"
+
+namespace envpis {
+
+namespace {
+bool positive(float w) { return w > 0 && std::isfinite(w); }
+float sanitize_alpha(float a) { return std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 1.0f; }
+}  // namespace
+
+RoughnessTransform parse_roughness_transform(const std::string& s) {
+  if (s == "slides") return RoughnessTransform::Slides;
+  if (s == "abstract") return RoughnessTransform::Abstract;
+  throw Error("unknown roughness transform '" + s + "' (expected slides or abstract)");
+}
+
+const char* to_string(RoughnessTransform t) { return t == RoughnessTransform::Slides ? "slides" : "abstract"; }
+
+void BsdfProxy::add_diffuse(float w) {
+  if (positive(w)) diffuse += w;
+}
+
+void BsdfProxy::add_translucent(float w) {
+  if (positive(w)) translucent += w;
+}
+
+void BsdfProxy::add_reflection(float w, float alpha) {
+  if (!positive(w)) return;
+  alpha_reflection = (alpha_reflection * reflection + sanitize_alpha(alpha) * w) / (reflection + w);
+  reflection += w;
+}
+
+void BsdfProxy::add_refraction(float w, float alpha, float eta) {
+  if (!positive(w)) return;
+  if (!(eta > 0) || !std::isfinite(eta)) eta = 1.0f;
+  const float total = refraction + w;
+  alpha_refraction = (alpha_refraction * refraction + sanitize_alpha(alpha) * w) / total;
+  ior = refraction > 0 ? (ior * refraction + eta * w) / total : eta;
+  refraction = total;
+}
+
+float widen_roughness(float alpha, float cos_divergence) {
+  if (!(cos_divergence > 0)) return 1.0f;
+  const float c2 = std::min(cos_divergence * cos_divergence, 1.0f);
+  const float tan2 = (1.0f - c2) / c2;
+  return std::min(1.0f, std::sqrt(tan2 / 8.0f + alpha * alpha));
+}
+
+PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const ProxyOptions& options) {
+  PreparedProxy p;
+  if (!is_valid_direction(n) || !is_valid_direction(wo) || proxy.is_zero()) return p;
+  n = normalize(n);
+  wo = normalize(wo);
+  float eta = (proxy.ior > 0 && std::isfinite(proxy.ior)) ? proxy.ior : 1.0f;
+  float cos_o = dot(n, wo);
+  if (cos_o < 0) {  // seen from below: describe the BSDF from wo's side
+    n = -n;
+    cos_o = -cos_o;
+    eta = 1.0f / eta;
+  }
+  cos_o = std::min(cos_o, 1.0f);
+  p.n = n;
+  p.eta = eta;
+  p.r = normalize(n * (2.0f * cos_o) - wo);
+
+  float wd = positive(proxy.diffuse) ? proxy.diffuse : 0.0f;
+  float wt_diffuse = positive(proxy.translucent) ? proxy.translucent : 0.0f;
+  float wr = positive(proxy.reflection) ? proxy.reflection : 0.0f;
+  float wt = positive(proxy.refraction) ? proxy.refraction : 0.0f;
+  float ar = sanitize_alpha(proxy.alpha_reflection), at = sanitize_alpha(proxy.alpha_refraction);
+
+  // Refracted direction T (Snell, eta = n_other / n_wo_side).
+  const float sin2_t = (1.0f - cos_o * cos_o) / (eta * eta);
+  float cos_t = 0;
+  if (sin2_t >= 1.0f) {
+    p.tir = wt > 0;
+    if (wt > 0) {  // total internal reflection: the transmitted energy is reflected
+      ar = (ar * wr + at * wt) / (wr + wt);
+      wr += wt;
+      wt = 0;
+    }
+    p.t = -n;
+  } else {
+    cos_t = std::sqrt(1.0f - sin2_t);
+    p.t = normalize(wo * (-1.0f / eta) + n * (cos_o / eta - cos_t));
+  }
+
+  // Roughness transform (half-vector -> incoming direction).
+  float ar_t, at_t = 1.0f;
+  if (options.transform == RoughnessTransform::Slides) {
+    ar_t = 2.0f * ar;
+    if (wt > 0) at_t = at * (cos_t + eta * cos_o) / std::max(cos_t, 1e-4f);
+  } else {
+    ar_t = ar * std::sqrt(4.0f * cos_o);
+    if (wt > 0) at_t = at * (cos_t * eta + cos_o) / std::sqrt(std::max(cos_t * eta * eta, 1e-8f));
+  }
+  const float floor = std::max(options.min_alpha, 1e-3f);
+  p.alpha_r = std::clamp(ar_t, floor, 1.0f);
+  p.alpha_t = std::clamp(at_t, floor, 1.0f);
+  p.kd = wd * kInvPi;
+  p.kt = wt_diffuse * kInvPi;
+  p.wr = wr;
+  p.wt = wt;
+  p.ok = true;
+  return p;
+}
+
+float PreparedProxy::eval_cone(Vec3 axis, float cos_half_angle, float sin_half_angle) const {
+  if (!ok) return 0.0f;
+  const detail::scalar::LobeV<float> l(detail::to_lobe_params(*this));
+  return detail::scalar::proxy_cone_value<float>(l, axis.x, axis.y, axis.z, cos_half_angle, sin_half_angle);
+}
+
+float PreparedProxy::eval(Vec3 wi) const { return eval_cone(wi, 1.0f, 0.0f); }
+
+}  // namespace envpis

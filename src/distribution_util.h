@@ -1,0 +1,57 @@
+// Internal: sampling a piecewise-constant 2D distribution stored as one row-major array of running
+// sums normalized to end at 1 (the marginal over rows is read off the row ends, so no separate
+// marginal table is stored).
+#pragma once
+
+#include <algorithm>
+
+#include "envpis/common.h"
+
+namespace envpis::detail {
+
+constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+
+inline float clamp_unit(float u) { return std::min(std::max(u, 0.0f), kOneMinusEpsilon); }
+
+struct Flat2DSample {
+  int x = 0, y = 0;      ///< chosen cell
+  float ox = 0, oy = 0;  ///< continuous offset inside it, [0,1)
+};
+
+/// `cdf` has w * h entries: cdf[y * w + x] = sum of the masses of cells before and including (x, y)
+/// in row-major order, divided by the total (so cdf[w*h-1] == 1). Chooses a row with u.y (from the
+/// row ends), then a column inside it with u.x: the sample keeps the 2D stratification of u.
+inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u) {
+  const float uy = clamp_unit(u.y), ux = clamp_unit(u.x);
+  // Row: first r whose row end exceeds uy.
+  int lo = 0, hi = h - 1;
+  while (lo < hi) {
+    const int mid = (lo + hi) >> 1;
+    if (cdf[mid * w + w - 1] > uy) hi = mid;
+    else lo = mid + 1;
+  }
+  Flat2DSample s;
+  s.y = lo;
+  const float row_start = s.y > 0 ? cdf[s.y * w - 1] : 0.0f;
+  const float row_end = cdf[s.y * w + w - 1];
+  const float row_mass = row_end - row_start;
+  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  // Column: first x in the row whose running sum exceeds the target.
+  const float target = row_start + ux * row_mass;
+  const float* row = cdf + s.y * w;
+  const float* it = std::upper_bound(row, row + w, target);
+  s.x = static_cast<int>(it - row);
+  if (s.x >= w) {  // rounding put the target at the row's end: take the last column with mass
+    s.x = w - 1;
+    while (s.x > 0 && row[s.x] <= row[s.x - 1]) --s.x;
+  }
+  const float c0 = s.x > 0 ? row[s.x - 1] : row_start;
+  const float mass = row[s.x] - c0;
+  s.ox = mass > 0 ? clamp_unit((target - c0) / mass) : 0.5f;
+  return s;
+}
+
+/// Mass of cell i from the running-sum array.
+inline float flat_mass(const float* cdf, int i) { return i > 0 ? cdf[i] - cdf[i - 1] : cdf[0]; }
+
+}  // namespace envpis::detail

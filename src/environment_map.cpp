@@ -1,0 +1,179 @@
+#include "envpis/environment_map.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <system_error>
+
+#include "envpis/equal_area.h"
+
+namespace envpis {
+
+namespace {
+constexpr std::size_t kMaxTexels = std::size_t(1) << 28;  // 268M texels, 3.2 GB of RGB floats
+
+[[noreturn]] void fail(const std::string& path, const std::string& why) {
+  throw Error("cannot load environment map '" + path + "': " + why);
+}
+
+std::string first_line(std::string s) {
+  const auto nl = s.find('\n');
+  if (nl != std::string::npos) s.resize(nl);
+  return s.empty() ? std::string("unknown error") : s;
+}
+}  // namespace
+
+MapLayout parse_map_layout(const std::string& s) {
+  if (s == "auto") return MapLayout::Auto;
+  if (s == "latlong" || s == "lat-long" || s == "equirect") return MapLayout::LatLong;
+  if (s == "equal-area" || s == "equalarea") return MapLayout::EqualArea;
+  throw Error("unknown map layout '" + s + "' (expected auto, latlong or equal-area)");
+}
+
+const char* to_string(MapLayout layout) {
+  switch (layout) {
+    case MapLayout::Auto: return "auto";
+    case MapLayout::LatLong: return "latlong";
+    case MapLayout::EqualArea: return "equal-area";
+  }
+  return "?";
+}
+
+Point2 direction_to_latlong(Vec3 d) {
+  const float len = length(d);
+  const float z = std::clamp(d.z / len, -1.0f, 1.0f);
+  float phi = std::atan2(d.y, d.x);
+  if (phi < 0) phi += 2 * kPi;
+  float u = phi * (0.5f * kInvPi);
+  if (u >= 1.0f) u -= 1.0f;
+  return {u, std::acos(z) * kInvPi};
+}
+
+Vec3 latlong_to_direction(Point2 uv) {
+  const float phi = uv.x * 2 * kPi, theta = uv.y * kPi;
+  const float s = std::sin(theta);
+  return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
+}
+
+EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMapOptions& options) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) fail(path, "no such file");
+  if (std::filesystem::is_directory(status)) fail(path, "is a directory, not an image file");
+  if (std::filesystem::file_size(path, ec) == 0 && !ec) fail(path, "the file is empty (0 bytes)");
+
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) fail(path, first_line(OIIO::geterror()));
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.deep) fail(path, "deep images are not supported");
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    fail(path, "the image has no pixels");
+  if (spec.depth > 1) fail(path, "volume images are not supported");
+  const std::size_t texels = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
+  if (texels > kMaxTexels) fail(path, "the image is too large (" + std::to_string(spec.width) + "x" +
+                                          std::to_string(spec.height) + ")");
+  const int nc = spec.nchannels;
+  std::vector<float> raw(texels * nc);
+  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
+    fail(path, "could not read the pixels (corrupt or truncated?): " + first_line(in->geterror()));
+  in->close();
+
+  std::vector<float> rgb(texels * 3);
+  for (std::size_t i = 0; i < texels; ++i) {
+    const float* p = &raw[i * nc];
+    rgb[i * 3 + 0] = p[0];
+    rgb[i * 3 + 1] = nc >= 3 ? p[1] : p[0];
+    rgb[i * 3 + 2] = nc >= 3 ? p[2] : p[0];
+  }
+  EnvironmentMap map = from_pixels(spec.width, spec.height, std::move(rgb), options);
+  map.path_ = path;
+  return map;
+}
+
+EnvironmentMap EnvironmentMap::from_pixels(int width, int height, std::vector<float> rgb,
+                                           const EnvironmentMapOptions& options) {
+  if (width <= 0 || height <= 0) throw Error("environment map size must be positive");
+  if (rgb.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3)
+    throw Error("environment map pixel array has the wrong size");
+  EnvironmentMap map;
+  map.width_ = width;
+  map.height_ = height;
+  map.pixels_ = std::move(rgb);
+  map.finish(options);
+  return map;
+}
+
+void EnvironmentMap::finish(const EnvironmentMapOptions& options) {
+  if (!(options.scale >= 0.0f) || !std::isfinite(options.scale))
+    throw Error("environment map scale must be finite and >= 0");
+  layout_ = options.layout;
+  if (layout_ == MapLayout::Auto) layout_ = width_ == height_ ? MapLayout::EqualArea : MapLayout::LatLong;
+  if (layout_ == MapLayout::EqualArea && width_ != height_)
+    throw Error("an equal-area environment map must be square, got " + std::to_string(width_) + "x" +
+                std::to_string(height_));
+  scale_ = options.scale;
+  rotation_ = options.rotation;
+  inverse_rotation_ = rotation_.transposed();
+  for (float& v : pixels_) {
+    if (std::isnan(v)) {
+      ++report_.nan_texels;
+      v = 0;
+    } else if (std::isinf(v)) {
+      ++report_.inf_texels;
+      v = 0;
+    } else if (v < 0) {
+      ++report_.negative_texels;
+      v = 0;
+    }
+    v *= scale_;
+    if (!std::isfinite(v)) v = std::numeric_limits<float>::max();  // huge texel * scale overflowed
+  }
+}
+
+Rgb EnvironmentMap::bilinear_latlong(float u, float v) const {
+  const float px = u * width_ - 0.5f, py = v * height_ - 0.5f;
+  const float fx = std::floor(px), fy = std::floor(py);
+  const float tx = px - fx, ty = py - fy;
+  int x0 = static_cast<int>(fx) % width_;
+  if (x0 < 0) x0 += width_;
+  const int x1 = x0 + 1 == width_ ? 0 : x0 + 1;
+  const int y0 = std::clamp(static_cast<int>(fy), 0, height_ - 1);
+  const int y1 = std::clamp(static_cast<int>(fy) + 1, 0, height_ - 1);
+  return (texel(x0, y0) * (1 - tx) + texel(x1, y0) * tx) * (1 - ty) +
+         (texel(x0, y1) * (1 - tx) + texel(x1, y1) * tx) * ty;
+}
+
+Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
+  const int n = width_;
+  const float px = x * n - 0.5f, py = y * n - 0.5f;
+  const float fx = std::floor(px), fy = std::floor(py);
+  const float tx = px - fx, ty = py - fy;
+  Rgb acc;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      int xi = static_cast<int>(fx) + i, yi = static_cast<int>(fy) + j;
+      if (!equal_area_wrap(n, xi, yi)) {
+        xi = std::clamp(xi, 0, n - 1);
+        yi = std::clamp(yi, 0, n - 1);
+      }
+      acc = acc + texel(xi, yi) * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
+    }
+  return acc;
+}
+
+Rgb EnvironmentMap::eval_texture(Point2 uv) const {
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
+  return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
+}
+
+Rgb EnvironmentMap::eval(Vec3 d) const {
+  if (!is_valid_direction(d)) return {};
+  const Vec3 m = to_map(d);
+  if (layout_ == MapLayout::EqualArea) return eval_texture(equal_area_sphere_to_square(m));
+  return eval_texture(direction_to_latlong(m));
+}
+
+}  // namespace envpis

@@ -1,0 +1,51 @@
+// Internal: the vectorized kernels and their run-time dispatch.
+#pragma once
+
+#include <cstddef>
+
+namespace envpis::detail {
+
+/// Top-level cells in structure-of-arrays form, padded to a multiple of kCellPad with zero-probability
+/// cells, so any SIMD width processes whole vectors.
+constexpr int kCellPad = 16;
+struct CellArrays {
+  const float* ax;
+  const float* ay;
+  const float* az;    ///< cone axis
+  const float* cosb;  ///< cos / sin of the cone half-angle
+  const float* sinb;
+  const float* prob;  ///< environment probability of the cell (sums to 1)
+  int padded_count;
+};
+
+/// The proxy, prepared for one shading point: lobe axes and the coefficients of
+///   diffuse     kd * max(0, cos t_N)
+///   translucent kt * max(0, cos t_-N)
+///   reflection  cr / (1 + mr cos^2 t_R)^2   for cos t_R > 0  (cr = w a^2 / pi, mr = a^2 - 1)
+///   refraction  ct / (1 + mt cos^2 t_T)^2   for cos t_T > 0
+/// where each t is the angle from the lobe axis to the closest direction of the cell's cone;
+/// reflection and diffuse need the cell to reach above the horizon, refraction and translucent below.
+struct LobeParams {
+  float n[3], r[3], t[3];
+  float kd, kt, cr, mr, ct, mt;
+};
+
+using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);
+using SphereToSquareFn = void (*)(std::size_t, const float*, const float*, const float*, float*, float*);
+using ProductWeightsFn = void (*)(const CellArrays&, const LobeParams&, float* weights);
+
+struct Kernels {
+  const char* name;
+  int width;
+  SquareToSphereFn square_to_sphere;
+  SphereToSquareFn sphere_to_square;
+  ProductWeightsFn product_weights;
+};
+
+const Kernels& kernels_scalar();
+const Kernels& kernels_sse2();
+const Kernels* kernels_avx2();  ///< nullptr when not compiled in
+/// The best set the CPU supports (respecting ENVPIS_SIMD), chosen once.
+const Kernels& kernels_best();
+
+}  // namespace envpis::detail

@@ -1,0 +1,12 @@
+// Compiled with the default x86-64 baseline (SSE2): 4 float lanes.
+#define ENVPIS_KERNEL_NS sse2
+#include "kernels_impl.inl"
+
+namespace envpis::detail {
+const Kernels& kernels_sse2() {
+  using V = std::experimental::native_simd<float>;
+  static const Kernels k{"sse2", static_cast<int>(V::size()), sse2::square_to_sphere_n<V>,
+                         sse2::sphere_to_square_n<V>, sse2::product_weights_t<V>};
+  return k;
+}
+}  // namespace envpis::detail

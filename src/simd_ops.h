@@ -1,0 +1,94 @@
+// Internal: a handful of operations written once for `float` (the scalar reference) and for
+// std::experimental::simd<float, Abi> (SSE2 / AVX2 lanes), so every kernel has one source.
+// Included once per instruction set, inside that set's own namespace (ENVPIS_KERNEL_NS), so that no
+// inline function compiled for AVX2 can be merged by the linker with its SSE2 or scalar twin.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <experimental/simd>
+
+namespace envpis::detail::ENVPIS_KERNEL_NS::simd {
+
+namespace stdx = std::experimental;
+
+// ---- scalar ----
+inline float select(bool m, float a, float b) { return m ? a : b; }
+inline float load(const float* p) { return *p; }
+inline void store(float v, float* p) { *p = v; }
+inline float vsqrt(float a) { return std::sqrt(a); }
+inline float vabs(float a) { return std::fabs(a); }
+inline float vmin(float a, float b) { return std::min(a, b); }
+inline float vmax(float a, float b) { return std::max(a, b); }
+inline float vcopysign(float mag, float sgn) { return std::copysign(mag, sgn); }
+template <class V>
+constexpr std::size_t lanes() {
+  if constexpr (std::is_same_v<V, float>) return 1;
+  else return V::size();
+}
+
+// ---- SIMD ----
+template <class A>
+using VF = stdx::simd<float, A>;
+template <class A>
+VF<A> select(typename VF<A>::mask_type m, VF<A> a, VF<A> b) {
+  VF<A> r = b;
+  stdx::where(m, r) = a;
+  return r;
+}
+template <class V>
+V load_v(const float* p) {
+  return V(p, stdx::element_aligned);
+}
+template <class A>
+void store(VF<A> v, float* p) { v.copy_to(p, stdx::element_aligned); }
+template <class A>
+VF<A> vsqrt(VF<A> a) { return stdx::sqrt(a); }
+template <class A>
+VF<A> vabs(VF<A> a) { return stdx::abs(a); }
+template <class A>
+VF<A> vmin(VF<A> a, VF<A> b) { return stdx::min(a, b); }
+template <class A>
+VF<A> vmax(VF<A> a, VF<A> b) { return stdx::max(a, b); }
+template <class A>
+VF<A> vcopysign(VF<A> mag, VF<A> sgn) { return stdx::copysign(mag, sgn); }
+
+template <class V>
+V load_any(const float* p) {
+  if constexpr (std::is_same_v<V, float>) return *p;
+  else return load_v<V>(p);
+}
+
+/// atan(x) for x in [0, 1], about 1 ulp (Cephes-style range reduction + odd polynomial).
+template <class V>
+V atan_unit(V x) {
+  const auto big = x > V(0.41421356237f);  // tan(pi/8)
+  const V t = select(big, (x - V(1.0f)) / (x + V(1.0f)), x);
+  const V z = t * t;
+  V p = V(8.05374449538e-2f) * z - V(1.38776856032e-1f);
+  p = p * z + V(1.99777106478e-1f);
+  p = p * z - V(3.33329491539e-1f);
+  p = p * z * t + t;
+  return select(big, p + V(0.78539816339744830962f), p);
+}
+
+/// sin and cos of phi in [0, pi/2] (polynomials, ~1e-7 absolute).
+template <class V>
+void sincos_quadrant(V phi, V& s, V& c) {
+  // Reduce to [0, pi/4] by symmetry about pi/4.
+  const auto hi = phi > V(0.78539816339744830962f);
+  const V x = select(hi, V(1.57079632679489661923f) - phi, phi);
+  const V x2 = x * x;
+  V sp = V(-1.9515295891e-4f);
+  sp = sp * x2 + V(8.3321608736e-3f);
+  sp = sp * x2 - V(1.6666654611e-1f);
+  const V sx = sp * x2 * x + x;
+  V cp = V(2.443315711809948e-5f);
+  cp = cp * x2 - V(1.388731625493765e-3f);
+  cp = cp * x2 + V(4.166664568298827e-2f);
+  const V cx = cp * x2 * x2 - V(0.5f) * x2 + V(1.0f);
+  s = select(hi, cx, sx);
+  c = select(hi, sx, cx);
+}
+
+}  // namespace envpis::detail::ENVPIS_KERNEL_NS::simd

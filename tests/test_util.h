@@ -1,0 +1,54 @@
+// Shared helpers for the tests: synthetic maps, the blender-data maps, a fixed-seed RNG.
+#pragma once
+
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "envpis/envpis.h"
+
+namespace envpis::test {
+
+/// Directory of Debian's blender-data studio-light HDRIs (1024x512 lat-long EXR).
+inline std::string blender_world_dir() { return "/usr/share/blender/datafiles/studiolights/world"; }
+
+inline std::vector<std::string> blender_map_names() {
+  return {"sunrise", "sunset", "studio", "interior", "city", "courtyard", "forest", "night"};
+}
+
+inline std::string blender_map(const std::string& name) { return blender_world_dir() + "/" + name + ".exr"; }
+
+inline bool have_blender_maps() { return std::filesystem::exists(blender_map("sunset")); }
+
+/// A lat-long map w x h whose texel (x, y) has radiance f(x, y) in all channels.
+template <class F>
+EnvironmentMap synthetic_latlong(int w, int h, F f, const EnvironmentMapOptions& opt = {}) {
+  std::vector<float> px(static_cast<std::size_t>(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float v = f(x, y);
+      for (int c = 0; c < 3; ++c) px[(static_cast<std::size_t>(y) * w + x) * 3 + c] = v;
+    }
+  return EnvironmentMap::from_pixels(w, h, std::move(px), opt);
+}
+
+/// A sky-like lat-long test map: a dim gradient, a small very bright "sun" and a bright band.
+inline EnvironmentMap synthetic_sky(int w = 256, int h = 128) {
+  return synthetic_latlong(w, h, [w, h](int x, int y) {
+    float v = 0.2f + 0.8f * float(h - y) / h;
+    if (std::abs(x - w / 3) <= 1 && std::abs(y - h / 4) <= 1) v = 5000.0f;  // sun
+    if (y > h / 2 && y < h / 2 + h / 16) v += 20.0f;                         // horizon band
+    return v;
+  });
+}
+
+/// Uniform random unit vector.
+inline Vec3 random_direction(std::mt19937_64& rng) {
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  const float z = 1 - 2 * U(rng), phi = 2 * kPi * U(rng), r = std::sqrt(std::max(0.0f, 1 - z * z));
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+}  // namespace envpis::test
