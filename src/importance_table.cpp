@@ -40,7 +40,7 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     F_ = kMaxFine / T_;
     N_ = T_ * F_;
   }
-  build_importance(map, options.floor);
+  build_importance(map, options.floor, options.compensated);
   build_cells();
   build_cones();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -53,12 +53,25 @@ std::size_t ImportanceTable::texel_index(int x, int y) const {
 
 float ImportanceTable::importance(int x, int y) const { return func_[texel_index(x, y)]; }
 
-void ImportanceTable::build_importance(const EnvironmentMap& map, float floor) {
+void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, bool compensated) {
   const std::size_t total = static_cast<std::size_t>(N_) * N_;
-  func_.assign(total, 0.0f);
-  // 1. Average of stratified bilinear look-ups over each table texel.
-  const double ratio = double(map.width()) * map.height() / double(total);
-  const int s = std::clamp(static_cast<int>(std::ceil(2.0 * std::sqrt(ratio))), 2, 8);
+  const double table_texel_sr = 4.0 * kPi / double(total);
+  const int w = map.width(), h = map.height();
+  const bool latlong = map.layout() != MapLayout::EqualArea;
+  // Solid angle of the map texel at map-space direction d.
+  const double ea_src_sr = 4.0 * kPi / (double(w) * h);
+  auto source_texel_sr = [&](Vec3 md) {
+    if (!latlong) return ea_src_sr;
+    const double s = std::sqrt(std::max(0.0, 1.0 - double(md.z) * md.z));
+    return (2.0 * kPi / w) * (kPi / h) * std::max(s, std::sin(0.5 * kPi / h));
+  };
+
+  // 1. Gather: the average of s x s stratified bilinear look-ups over each table texel. Accurate where
+  // map texels are at least about as large as table texels.
+  const double ratio = double(w) * h / double(total);
+  const int s = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio) - 0.25)), 1, 8);
+  std::vector<float> gather(total, 0.0f);
+  std::vector<std::uint8_t> small_source(total, 0);  // map texels < half a table texel here
   const float inv = 1.0f / float(N_ * s);
   tbb::parallel_for(tbb::blocked_range<int>(0, N_), [&](const tbb::blocked_range<int>& rows) {
     const std::size_t m = static_cast<std::size_t>(N_) * s;
@@ -78,46 +91,107 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor) {
             const Rgb L = map.eval({dx[i], dy[i], dz[i]});
             acc += (double(L.r) + L.g + L.b) / 3.0;
           }
-          func_[texel_index(x, y)] += static_cast<float>(acc / (double(s) * s));
+          gather[texel_index(x, y)] += static_cast<float>(acc / (double(s) * s));
+          if (sy == s / 2) {
+            const std::size_t i = static_cast<std::size_t>(x) * s + s / 2;
+            const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
+            small_source[texel_index(x, y)] = source_texel_sr(md) < 0.5 * table_texel_sr;
+          }
         }
       }
     }
   });
-  // 2. Splat every map texel (importance times its solid angle) into the table texel holding its
-  // centre, so that texels much smaller than a table texel (near a lat-long map's poles) are never
-  // missed by the point look-ups above.
-  const int w = map.width(), h = map.height();
-  std::vector<std::uint32_t> dest(static_cast<std::size_t>(w) * h);
-  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-    for (int y = rows.begin(); y < rows.end(); ++y)
-      for (int x = 0; x < w; ++x) {
-        const Point2 uv{(x + 0.5f) / w, (y + 0.5f) / h};
-        const Vec3 md = map.layout() == MapLayout::EqualArea ? equal_area_square_to_sphere(uv)
-                                                               : latlong_to_direction(uv);
-        const Point2 p = equal_area_sphere_to_square(map.to_world(md));
-        const int tx = std::min(static_cast<int>(p.x * N_), N_ - 1);
-        const int ty = std::min(static_cast<int>(p.y * N_), N_ - 1);
-        dest[static_cast<std::size_t>(y) * w + x] = static_cast<std::uint32_t>(texel_index(tx, ty));
-      }
-  });
+
+  // 2. Splat: every map texel's importance times its solid angle is spread with bilinear (tent)
+  // weights over the 2 x 2 table texels around its centre. Energy-conserving where map texels are
+  // smaller than table texels (near a lat-long map's poles), where point look-ups would miss a small
+  // bright texel or over-count it. A map texel taller or wider than half a table texel is split into
+  // sub-texels first (each with its exact solid angle), so the splat stays smooth.
+  // Rows are processed in chunks: parallel mapping, serial accumulation.
   std::vector<double> splat(total, 0.0);
-  const double table_texel_sr = 4.0 * kPi / double(total);
-  for (int y = 0; y < h; ++y) {
-    double texel_sr;
-    if (map.layout() == MapLayout::EqualArea) {
-      texel_sr = 4.0 * kPi / (double(w) * h);
-    } else {
-      const double t0 = kPi * double(y) / h, t1 = kPi * double(y + 1) / h;
-      texel_sr = 2.0 * kPi / w * (std::cos(t0) - std::cos(t1));
-    }
-    for (int x = 0; x < w; ++x) {
-      const Rgb L = map.texel(x, y);
-      splat[dest[static_cast<std::size_t>(y) * w + x]] += (double(L.r) + L.g + L.b) / 3.0 * texel_sr;
+  const double table_side = std::sqrt(table_texel_sr);
+  auto splits = [&](int y, int& kx, int& ky) {
+    const double theta = kPi * (y + 0.5) / h;
+    const double height = latlong ? kPi / h : std::sqrt(ea_src_sr);
+    const double width = latlong ? 2.0 * kPi / w * std::max(std::sin(theta), std::sin(0.5 * kPi / h))
+                                 : std::sqrt(ea_src_sr);
+    kx = std::clamp(static_cast<int>(std::ceil(2.0 * width / table_side)), 1, 16);
+    ky = std::clamp(static_cast<int>(std::ceil(2.0 * height / table_side)), 1, 16);
+  };
+  struct Row {
+    std::vector<float> u, v, e;
+  };
+  const int chunk = std::max(1, std::min(h, (1 << 18) / w));
+  std::vector<Row> rows_out(chunk);
+  for (int y0 = 0; y0 < h; y0 += chunk) {
+    const int y1 = std::min(h, y0 + chunk);
+    tbb::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
+      std::vector<float> mx, my, mz;
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        int kx, ky;
+        splits(y, kx, ky);
+        Row& out = rows_out[y - y0];
+        const std::size_t m = static_cast<std::size_t>(w) * kx * ky;
+        mx.resize(m);
+        my.resize(m);
+        mz.resize(m);
+        out.u.resize(m);
+        out.v.resize(m);
+        out.e.resize(m);
+        std::size_t k = 0;
+        for (int j = 0; j < ky; ++j) {
+          const double v0 = (y + double(j) / ky) / h, v1 = (y + double(j + 1) / ky) / h;
+          const double sub_sr = latlong ? 2.0 * kPi / (double(w) * kx) * (std::cos(kPi * v0) - std::cos(kPi * v1))
+                                        : ea_src_sr / (double(kx) * ky);
+          for (int x = 0; x < w; ++x) {
+            const Rgb L = map.texel(x, y);
+            const float e = static_cast<float>((double(L.r) + L.g + L.b) / 3.0 * sub_sr);
+            for (int i = 0; i < kx; ++i, ++k) {
+              const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
+              const Vec3 d = map.to_world(latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv));
+              mx[k] = d.x;
+              my[k] = d.y;
+              mz[k] = d.z;
+              out.e[k] = e;
+            }
+          }
+        }
+        equal_area_sphere_to_square(m, mx.data(), my.data(), mz.data(), out.u.data(), out.v.data());
+      }
+    });
+    for (int y = y0; y < y1; ++y) {
+      const Row& r = rows_out[y - y0];
+      for (std::size_t k = 0; k < r.e.size(); ++k) {
+        if (!(r.e[k] > 0)) continue;
+        const float px = r.u[k] * N_ - 0.5f, py = r.v[k] * N_ - 0.5f;
+        const float fx = std::floor(px), fy = std::floor(py);
+        const float tx = px - fx, ty = py - fy;
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i) {
+            int xi = static_cast<int>(fx) + i, yi = static_cast<int>(fy) + j;
+            if (!equal_area_wrap(N_, xi, yi)) continue;
+            splat[texel_index(xi, yi)] += double(r.e[k]) * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
+          }
+      }
     }
   }
+  // Is the map constant? (Then a compensated table is the plain one.)
+  float lo = std::numeric_limits<float>::max(), hi = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float a = map.texel(x, y).average();
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
+    }
+  if (hi - lo <= 1e-6f * hi) compensated = false;
+
+  // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
+  // (so a texel that sees light by either route keeps a positive density).
+  func_.assign(total, 0.0f);
   double sum = 0;
   for (std::size_t i = 0; i < total; ++i) {
-    const double v = std::max<double>(func_[i], splat[i] / table_texel_sr);
+    const double sp = splat[i] / table_texel_sr, ga = gather[i];
+    double v = small_source[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
     func_[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
     sum += func_[i];
   }
@@ -126,6 +200,16 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor) {
     std::fill(func_.begin(), func_.end(), 0.0f);
     integral_ = 0;
     return;
+  }
+  if (compensated) {
+    const float mean = static_cast<float>(sum / double(total));
+    double csum = 0;
+    for (float v : func_) csum += std::max(0.0f, v - mean);
+    if (csum > 0) {
+      for (float& v : func_) v = std::max(0.0f, v - mean);
+      integral_ = csum * table_texel_sr;
+      return;
+    }
   }
   // 3. Floor: positive density everywhere.
   const float min_value = static_cast<float>(floor * sum / double(total));
