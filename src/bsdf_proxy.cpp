@@ -17,10 +17,18 @@ float sanitize_alpha(float a) { return std::isfinite(a) ? std::clamp(a, 0.0f, 1.
 RoughnessTransform parse_roughness_transform(const std::string& s) {
   if (s == "slides") return RoughnessTransform::Slides;
   if (s == "abstract") return RoughnessTransform::Abstract;
-  throw Error("unknown roughness transform '" + s + "' (expected slides or abstract)");
+  if (s == "hybrid") return RoughnessTransform::Hybrid;
+  throw Error("unknown roughness transform '" + s + "' (expected slides, abstract or hybrid)");
 }
 
-const char* to_string(RoughnessTransform t) { return t == RoughnessTransform::Slides ? "slides" : "abstract"; }
+const char* to_string(RoughnessTransform t) {
+  switch (t) {
+    case RoughnessTransform::Slides: return "slides";
+    case RoughnessTransform::Abstract: return "abstract";
+    case RoughnessTransform::Hybrid: return "hybrid";
+  }
+  return "?";
+}
 
 void BsdfProxy::add_diffuse(float w) {
   if (positive(w)) diffuse += w;
@@ -92,14 +100,13 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
   }
 
   // Roughness transform (half-vector -> incoming direction).
-  float ar_t, at_t = 1.0f;
-  if (options.transform == RoughnessTransform::Slides) {
-    ar_t = 2.0f * ar;
-    if (wt > 0) at_t = at * (cos_t + eta * cos_o) / std::max(cos_t, 1e-4f);
-  } else {
-    ar_t = ar * std::sqrt(4.0f * cos_o);
-    if (wt > 0) at_t = at * (cos_t * eta + cos_o) / std::sqrt(std::max(cos_t * eta * eta, 1e-8f));
-  }
+  const bool slides_r = options.transform != RoughnessTransform::Abstract;
+  const bool slides_t = options.transform == RoughnessTransform::Slides;
+  const float ar_t = slides_r ? 2.0f * ar : ar * std::sqrt(4.0f * cos_o);
+  float at_t = 1.0f;
+  if (wt > 0)
+    at_t = slides_t ? at * (cos_t + eta * cos_o) / std::max(cos_t, 1e-4f)
+                    : at * (cos_t * eta + cos_o) / std::sqrt(std::max(cos_t * eta * eta, 1e-8f));
   const float floor = std::max(options.min_alpha, 1e-3f);
   p.alpha_r = std::clamp(ar_t, floor, 1.0f);
   p.alpha_t = std::clamp(at_t, floor, 1.0f);

@@ -63,10 +63,15 @@ inline V closest_cos(V c, V cosb, V sinb) {
   return select(c >= cosb, V(1.0f), c * cosb + s * sinb);
 }
 
+/// The simplified GGX lobe coef / (1 + m c^2)^2 for c > 0; beyond 90 degrees from the lobe axis it keeps
+/// its value at 90 degrees (the lobe's tail, coef = w a^2 / pi) instead of rising again, so that every
+/// direction on the lobe's side of the surface keeps a small positive weight (true GGX lobes reach the
+/// whole hemisphere through the half-vector, e.g. back-scattering at grazing views).
 template <class V>
 inline V ggx_like(V c, V coef, V m) {
-  const V d = V(1.0f) + m * c * c;
-  return select(c > V(0.0f), coef / (d * d), V(0.0f));
+  const V cp = vmax(c, V(0.0f));
+  const V d = V(1.0f) + m * cp * cp;
+  return coef / (d * d);
 }
 
 /// LobeParams broadcast to V.

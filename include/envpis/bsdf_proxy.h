@@ -19,10 +19,13 @@
 //
 // The roughnesses are transformed once per shading point (the half-vector to incoming-direction
 // change of variables widens the lobe). The talk's abstract and the authors' slides differ:
-//   Slides   (default): a_r' = 2 a_r,               a_t' = a_t (cos_t + eta cos_o) / cos_t
+//   Slides:             a_r' = 2 a_r,               a_t' = a_t (cos_t + eta cos_o) / cos_t
 //   Abstract:           a_r' = a_r sqrt(4 cos_o),   a_t' = a_t (cos_t eta + cos_o) / sqrt(cos_t eta^2)
-// where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is the one
-// that measured better (see docs/proxy.md and tests/test_bsdf_proxy.cpp). Then a' is clamped to
+//   Hybrid (default):   the slides' a_r' and the abstract's a_t'
+// where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is what
+// measured best (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes; docs/proxy.md): for
+// reflection the abstract's a_r' is far too narrow at grazing views (4x the cell-level variance at 80
+// degrees), for refraction the slides' a_t' is about twice too wide. Then a' is clamped to
 // [min_alpha, 1]: the floor is the low-roughness remedy of DESIGN.md section 8 (a near-mirror lobe
 // gives its peak value to every cell its axis touches and starves the cells reached only by its tail),
 // and above 1 the GGX shape stops being a lobe (it would peak at the horizon).
@@ -44,12 +47,12 @@
 
 namespace envpis {
 
-enum class RoughnessTransform { Slides, Abstract };
-RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract"
+enum class RoughnessTransform { Slides, Abstract, Hybrid };
+RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract" | "hybrid"
 const char* to_string(RoughnessTransform t);
 
 struct ProxyOptions {
-  RoughnessTransform transform = RoughnessTransform::Slides;
+  RoughnessTransform transform = RoughnessTransform::Hybrid;
   float min_alpha = 0.35f;  ///< floor on the transformed roughness a' (0 disables)
 };
 

@@ -1,0 +1,324 @@
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <memory>
+#include <new>
+#include <random>
+
+#include "chi2.h"
+#include "test_util.h"
+
+// Counts heap allocations, to check that prepare() and sample() never allocate.
+static std::atomic<long> g_allocations{0};
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace envpis;
+using namespace envpis::test;
+
+namespace {
+
+int aligned_bins(int n, int cap = 64) {
+  for (int b = cap; b > 1; --b)
+    if (n % b == 0) return b;
+  return 1;
+}
+
+struct Config {
+  Vec3 n, wo;
+  BsdfProxy proxy;
+  std::string label;
+};
+
+/// Random shading configurations: normal anywhere, wo in its upper hemisphere (some grazing, some
+/// from below for refraction), proxies mixing the four lobes with roughness from 0 to 1.
+std::vector<Config> random_configs(int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> U(0, 1);
+  std::vector<Config> out;
+  for (int i = 0; i < count; ++i) {
+    Config c;
+    c.n = random_direction(rng);
+    Vec3 wo = random_direction(rng);
+    if (dot(wo, c.n) < 0 && i % 5 != 0) wo = -wo;  // every fifth: seen from below
+    if (i % 7 == 3) wo = normalize(wo - c.n * (dot(wo, c.n) * 0.98f));  // near grazing
+    c.wo = wo;
+    const int kind = i % 6;
+    const float a = std::vector<float>{0.0f, 0.02f, 0.1f, 0.2f, 0.3f, 0.5f, 1.0f}[i % 7];
+    switch (kind) {
+      case 0: c.proxy.add_reflection(1, a); break;
+      case 1: c.proxy.add_diffuse(0.7f); c.proxy.add_reflection(0.3f, a); break;
+      case 2: c.proxy.add_reflection(0.1f, a); c.proxy.add_refraction(0.9f, a, 1.5f); break;
+      case 3: c.proxy.add_diffuse(0.5f); c.proxy.add_translucent(0.5f); break;
+      case 4: c.proxy.add_refraction(1, a, i % 2 ? 1.0f : 0.7f); break;
+      default: c.proxy.add_diffuse(U(rng)); c.proxy.add_reflection(U(rng), a); c.proxy.add_refraction(U(rng), U(rng), 1.33f); break;
+    }
+    c.label = "config " + std::to_string(i) + " kind " + std::to_string(kind) + " alpha " + std::to_string(a);
+    out.push_back(c);
+  }
+  return out;
+}
+
+Chi2Result product_chi2(const ProductSampler& ps, std::uint64_t seed, int tests, std::size_t samples = 100000) {
+  const int N = ps.table().fine_resolution();
+  Chi2Options opt;
+  opt.bins = aligned_bins(N);
+  opt.sub = N / opt.bins;
+  opt.samples = samples;
+  opt.seed = seed;
+  opt.test_count = tests;
+  return chi2_test(
+      [&](float a, float b) -> std::optional<Vec3> {
+        const DirectionSample s = ps.sample({a, b});
+        if (s.pdf <= 0) return std::nullopt;
+        return s.direction;
+      },
+      [&](Vec3 d) { return double(ps.pdf(d)); }, opt);
+}
+
+std::vector<std::pair<std::string, std::shared_ptr<ImportanceTable>>> test_tables() {
+  std::vector<std::pair<std::string, std::shared_ptr<ImportanceTable>>> t;
+  t.emplace_back("synthetic sky", std::make_shared<ImportanceTable>(synthetic_sky(256, 128)));
+  EnvironmentMapOptions o;
+  o.rotation = Mat3::rotate_z(-50);
+  t.emplace_back("synthetic equal-area",
+                 std::make_shared<ImportanceTable>(synthetic_latlong(120, 120, [](int x, int y) {
+                   return 0.1f + ((x / 10 + y / 10) % 3 == 0 ? 30.0f : 0.0f);
+                 }, o)));
+  if (have_blender_maps())
+    for (const char* name : {"sunset", "studio", "forest"})
+      t.emplace_back(name, std::make_shared<ImportanceTable>(EnvironmentMap::load(blender_map(name))));
+  return t;
+}
+
+}  // namespace
+
+TEST(ProductSampler, ChiSquareOverManyConfigurations) {
+  const auto tables = test_tables();
+  const int per_table = 14;  // 5 tables x 14 = 70 configurations (40 without blender-data)
+  const int tests = per_table * int(tables.size());
+  int failures = 0, k = 0;
+  for (const auto& [name, table] : tables) {
+    ProductSampler ps(*table);
+    for (const Config& c : random_configs(per_table, 100 + k)) {
+      ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy)) << name << " " << c.label;
+      const auto r = product_chi2(ps, 1000 + k++, tests);
+      if (!r.passed) ++failures;
+      EXPECT_TRUE(r.passed) << name << " " << c.label << ": " << r.message;
+    }
+  }
+  std::printf("%d product chi-square tests, %d failed\n", k, failures);
+  EXPECT_GE(k, 50);
+}
+
+TEST(ProductSampler, SamplePdfEqualsPdfOfDirectionAndIntegratesToOne) {
+  const auto tables = test_tables();
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<float> U(0, 1);
+  int k = 0;
+  for (const auto& [name, table] : tables) {
+    ProductSampler ps(*table);
+    for (const Config& c : random_configs(4, 7 + k++)) {
+      ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy));
+      for (int i = 0; i < 5000; ++i) {
+        const DirectionSample s = ps.sample({U(rng), U(rng)});
+        ASSERT_GT(s.pdf, 0.0f);
+        ASSERT_TRUE(std::isfinite(s.pdf));
+        ASSERT_NEAR(length(s.direction), 1.0f, 1e-5f);
+        ASSERT_NEAR(s.pdf, ps.pdf(s.direction), 1e-4f * s.pdf);
+        ASSERT_EQ(s.cell, table->cell_of_direction(s.direction));
+      }
+      // Integral by importance sampling from a differently configured product sampler (wider lobes,
+      // half environment) mixed with uniform directions: the ratio pdf / q stays bounded.
+      ProductSamplerOptions wide;
+      wide.env_mix = 0.5f;
+      wide.proxy.min_alpha = 0.5f;
+      ProductSampler helper(*table, wide);
+      ASSERT_TRUE(helper.prepare(c.n, c.wo, c.proxy));
+      double acc = 0;
+      const int n = 200000;
+      for (int i = 0; i < n; ++i) {
+        const Vec3 d = U(rng) < 0.7f ? helper.sample({U(rng), U(rng)}).direction : random_direction(rng);
+        acc += ps.pdf(d) / (0.7 * helper.pdf(d) + 0.3 / (4 * M_PI));
+      }
+      EXPECT_NEAR(acc / n, 1.0, 0.01) << name << " " << c.label;
+    }
+  }
+}
+
+TEST(ProductSampler, SimdWeightsEqualScalarReference) {
+  const auto tables = test_tables();
+  for (const auto& [name, table] : tables) {
+    ProductSamplerOptions scalar_opt;
+    scalar_opt.simd = false;
+    ProductSampler simd(*table), scalar(*table, scalar_opt);
+    for (const Config& c : random_configs(40, 3)) {
+      ASSERT_TRUE(simd.prepare(c.n, c.wo, c.proxy));
+      ASSERT_TRUE(scalar.prepare(c.n, c.wo, c.proxy));
+      // An independent reference: E[c] * proxy evaluated at each cone, normalized.
+      const PreparedProxy& pp = simd.prepared_proxy();
+      std::vector<double> ref(table->cell_count());
+      double sum = 0;
+      for (int i = 0; i < table->cell_count(); ++i) {
+        const Cone& cone = table->cell_cone(i);
+        sum += ref[i] = double(table->cell_probability(i)) * pp.eval_cone(cone.axis, cone.cos_half_angle, cone.sin_half_angle);
+      }
+      for (int i = 0; i < table->cell_count(); ++i) {
+        const double r = ref[i] / sum;
+        ASSERT_NEAR(simd.cell_probability(i), scalar.cell_probability(i), 1e-5 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
+        ASSERT_NEAR(simd.cell_probability(i), r, 1e-4 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
+      }
+    }
+  }
+}
+
+TEST(ProductSampler, ConeEstimateIsConservative) {
+  // The closest-direction estimate of every cell bounds the proxy at every direction of that cell.
+  const ImportanceTable table(synthetic_sky(128, 64));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (const Config& c : random_configs(30, 11)) {
+    const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo);
+    ASSERT_TRUE(pp.valid());
+    for (int cell = 0; cell < table.cell_count(); ++cell) {
+      const Cone& cone = table.cell_cone(cell);
+      const float bound = pp.eval_cone(cone.axis, cone.cos_half_angle, cone.sin_half_angle);
+      const int T = table.top_resolution();
+      for (int i = 0; i < 40; ++i) {
+        const Vec3 d = equal_area_square_to_sphere({(cell % T + U(rng)) / T, (cell / T + U(rng)) / T});
+        ASSERT_LE(pp.eval(d), bound * (1 + 1e-4f) + 1e-7f) << c.label << " cell " << cell;
+      }
+    }
+  }
+}
+
+TEST(ProductSampler, UnbiasedAgainstQuadrature) {
+  // Estimate I = integral of L(w) g(w) with g a glossy lobe max(0, R.w)^k (the "BSDF") by the
+  // product sampler alone and by environment sampling alone; both must agree with a fine quadrature
+  // (z-test, 4 sigma). g vanishes exactly where the proxy's reflection lobe does, so the product
+  // estimator alone is unbiased.
+  const EnvironmentMap map = have_blender_maps() ? EnvironmentMap::load(blender_map("studio")) : synthetic_sky();
+  const ImportanceTable table(map);
+  ProductSampler ps(table);
+  const Vec3 n = normalize(Vec3{0.3f, -0.2f, 1.0f}), wo = normalize(Vec3{-0.5f, 0.4f, 0.8f});
+  const Vec3 r = normalize(n * (2 * dot(n, wo)) - wo);
+  const float k = 40;
+  auto g = [&](Vec3 w) { return dot(w, n) > 0 ? std::pow(std::max(0.0f, dot(r, w)), k) : 0.0f; };
+  BsdfProxy proxy;
+  proxy.add_reflection(1.0f, 0.15f);
+  ASSERT_TRUE(ps.prepare(n, wo, proxy));
+  // Quadrature on a fine equal-area grid (each point has solid angle 4 pi / m^2).
+  const int m = 3000;
+  double quad = 0;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      const Vec3 w = equal_area_square_to_sphere({(i + 0.5f) / m, (j + 0.5f) / m});
+      const float gw = g(w);
+      if (gw > 0) quad += map.eval(w).average() * gw;
+    }
+  quad *= 4 * M_PI / (double(m) * m);
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<float> U(0, 1);
+  auto estimate = [&](auto&& sampler) {
+    double s = 0, s2 = 0;
+    const int count = 400000;
+    for (int i = 0; i < count; ++i) {
+      const DirectionSample ds = sampler({U(rng), U(rng)});
+      const double f = ds.pdf > 0 ? map.eval(ds.direction).average() * g(ds.direction) / ds.pdf : 0.0;
+      s += f;
+      s2 += f * f;
+    }
+    const double mean = s / count, var = (s2 / count - mean * mean) / count;
+    return std::pair{mean, std::sqrt(var)};
+  };
+  const auto [prod, prod_se] = estimate([&](Point2 u) { return ps.sample(u); });
+  const auto [env, env_se] = estimate([&](Point2 u) { return table.sample(u); });
+  // The quadrature has its own small error; allow 0.3% of it besides the statistical error.
+  EXPECT_LT(std::abs(prod - quad), 4 * prod_se + 3e-3 * quad) << prod << " vs " << quad;
+  EXPECT_LT(std::abs(env - quad), 4 * env_se + 3e-3 * quad) << env << " vs " << quad;
+  std::printf("quadrature %.6g  product %.6g +- %.2g  env %.6g +- %.2g  (variance ratio env/product %.2f)\n", quad, prod,
+              prod_se, env, env_se, (env_se * env_se) / (prod_se * prod_se));
+  EXPECT_LT(prod_se, env_se);  // product sampling must help on a glossy lobe
+}
+
+TEST(ProductSampler, PrepareAndSampleDoNotAllocate) {
+  const ImportanceTable table(synthetic_sky());
+  ProductSampler ps(table);
+  const auto configs = random_configs(20, 9);
+  const long before = g_allocations.load();
+  float acc = 0;
+  for (const Config& c : configs) {
+    ps.prepare(c.n, c.wo, c.proxy);
+    for (int i = 0; i < 10; ++i) {
+      const DirectionSample s = ps.sample({i / 10.0f, 0.37f});
+      acc += s.pdf + ps.pdf(s.direction);
+    }
+  }
+  EXPECT_EQ(g_allocations.load(), before);
+  EXPECT_GT(acc, 0);
+}
+
+TEST(ProductSampler, DegenerateShadingPoints) {
+  const ImportanceTable table(synthetic_sky());
+  ProductSampler ps(table);
+  BsdfProxy glossy;
+  glossy.add_reflection(1, 0.2f);
+  const float nan = std::nanf("");
+  // Zero or NaN normal / wo: invalid, no sample, pdf 0, never NaN.
+  for (auto [n, wo] : {std::pair{Vec3{0, 0, 0}, Vec3{0, 0, 1}}, std::pair{Vec3{0, 0, 1}, Vec3{0, 0, 0}},
+                       std::pair{Vec3{nan, 0, 1}, Vec3{0, 0, 1}}, std::pair{Vec3{0, 0, 1}, Vec3{0, nan, 1}},
+                       std::pair{Vec3{0, 0, INFINITY}, Vec3{0, 0, 1}}}) {
+    EXPECT_FALSE(ps.prepare(n, wo, glossy));
+    EXPECT_EQ(ps.sample({0.5f, 0.5f}).pdf, 0.0f);
+    EXPECT_EQ(ps.pdf({0, 0, 1}), 0.0f);
+  }
+  // An all-zero proxy falls back to the environment distribution.
+  ASSERT_TRUE(ps.prepare({0, 0, 1}, {0, 0, 1}, BsdfProxy{}));
+  EXPECT_TRUE(ps.uses_environment_fallback());
+  EXPECT_NEAR(ps.pdf({0.3f, 0.1f, 0.9f}), table.pdf(normalize(Vec3{0.3f, 0.1f, 0.9f})), 1e-6f);
+  // wo below the surface, roughness 0 and 1, IOR 1 and below 1, NaN IOR: valid, finite, consistent.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (float a : {0.0f, 1.0f})
+    for (float ior : {1.0f, 0.6f, 1.5f, nan, -2.0f, 0.0f})
+      for (Vec3 wo : {Vec3{0.3f, 0, 1}, Vec3{0.3f, 0, -1}, Vec3{1, 0, 0}}) {
+        BsdfProxy p;
+        p.add_reflection(0.5f, a);
+        p.add_refraction(0.5f, a, ior);
+        ASSERT_TRUE(ps.prepare({0, 0, 1}, wo, p)) << a << " " << ior;
+        for (int i = 0; i < 200; ++i) {
+          const DirectionSample s = ps.sample({U(rng), U(rng)});
+          ASSERT_TRUE(s.pdf > 0 && std::isfinite(s.pdf)) << a << " " << ior;
+          ASSERT_TRUE(std::isfinite(s.direction.x) && std::isfinite(s.direction.y) && std::isfinite(s.direction.z));
+          ASSERT_NEAR(s.pdf, ps.pdf(s.direction), 1e-4f * s.pdf);
+        }
+      }
+  // Empty table (all-black map): invalid.
+  const ImportanceTable black(synthetic_latlong(16, 8, [](int, int) { return 0.0f; }));
+  ProductSampler pb(black);
+  EXPECT_FALSE(pb.prepare({0, 0, 1}, {0, 0, 1}, glossy));
+  EXPECT_EQ(pb.sample({0.2f, 0.2f}).pdf, 0.0f);
+}
+
+TEST(ProductSampler, EnvironmentMixtureAndOptions) {
+  const ImportanceTable table(synthetic_sky());
+  ProductSamplerOptions o;
+  o.env_mix = 0.25f;
+  ProductSampler mixed(table, o), plain(table);
+  BsdfProxy p;
+  p.add_reflection(1, 0.1f);
+  const Vec3 n{0, 0, 1}, wo = normalize(Vec3{1, 0, 1});
+  ASSERT_TRUE(mixed.prepare(n, wo, p));
+  ASSERT_TRUE(plain.prepare(n, wo, p));
+  for (int c = 0; c < table.cell_count(); ++c)
+    EXPECT_NEAR(mixed.cell_probability(c), 0.75f * plain.cell_probability(c) + 0.25f * table.cell_probability(c), 1e-6f);
+  const auto r = product_chi2(mixed, 5, 1);
+  EXPECT_TRUE(r.passed) << r.message;
+  o.env_mix = 1.5f;
+  EXPECT_THROW(ProductSampler(table, o), Error);
+}
