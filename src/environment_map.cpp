@@ -13,6 +13,7 @@
 namespace envpis {
 
 namespace {
+constexpr float kMaxRadiance = 1e30f;
 constexpr std::size_t kMaxTexels = std::size_t(1) << 28;  // 268M texels, 3.2 GB of RGB floats
 
 [[noreturn]] void fail(const std::string& path, const std::string& why) {
@@ -128,8 +129,7 @@ void EnvironmentMap::finish(const EnvironmentMapOptions& options) {
       ++report_.negative_texels;
       v = 0;
     }
-    v *= scale_;
-    if (!std::isfinite(v)) v = std::numeric_limits<float>::max();  // huge texel * scale overflowed
+    v = std::min(v * scale_, kMaxRadiance);  // also catches a huge texel * scale overflowing to inf
   }
 }
 

@@ -32,7 +32,8 @@ struct EnvironmentMapOptions {
 
 /// What load() had to repair. Policy: a texel channel that is NaN, infinite or negative is replaced by
 /// 0 (an infinite or negative radiance has no physical meaning and would poison every pixel that sees
-/// it); the counts let callers warn.
+/// it); the counts let callers warn. After the scale, channels are clamped to 1e30 so that sums and
+/// filtering stay finite.
 struct MapLoadReport {
   std::size_t nan_texels = 0;
   std::size_t inf_texels = 0;

@@ -1,0 +1,207 @@
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "test_util.h"
+
+using namespace envpis;
+using namespace envpis::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / ("envpis_test_map_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+void write_image(const std::string& path, int w, int h, int channels, const std::vector<float>& px) {
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out) << OIIO::geterror();
+  OIIO::ImageSpec spec(w, h, channels, OIIO::TypeDesc::FLOAT);
+  ASSERT_TRUE(out->open(path, spec));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+  out->close();
+}
+
+std::string load_error(const std::string& path, const EnvironmentMapOptions& o = {}) {
+  try {
+    EnvironmentMap::load(path, o);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(EnvironmentMap, LoadsEveryBlenderMap) {
+  if (!have_blender_maps()) GTEST_SKIP() << "blender-data not installed";
+  for (const auto& name : blender_map_names()) {
+    const EnvironmentMap m = EnvironmentMap::load(blender_map(name));
+    EXPECT_EQ(m.width(), 1024) << name;
+    EXPECT_EQ(m.height(), 512) << name;
+    EXPECT_EQ(m.layout(), MapLayout::LatLong);
+    const Rgb up = m.eval({0, 0, 1});
+    EXPECT_TRUE(std::isfinite(up.r) && up.r >= 0) << name;
+  }
+}
+
+TEST(EnvironmentMap, WritesAndReadsExrAndHdr) {
+  const fs::path dir = temp_dir();
+  const int w = 8, h = 4;
+  std::vector<float> px(w * h * 3);
+  for (int i = 0; i < w * h * 3; ++i) px[i] = 0.25f * (i % 7) + 0.5f;
+  for (const char* ext : {".exr", ".hdr"}) {
+    const std::string path = (dir / (std::string("map") + ext)).string();
+    write_image(path, w, h, 3, px);
+    const EnvironmentMap m = EnvironmentMap::load(path);
+    EXPECT_EQ(m.width(), w);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Rgb t = m.texel(x, y);
+        const float* e = &px[(y * w + x) * 3];
+        const float tol = std::string(ext) == ".hdr" ? 0.02f * e[0] : 1e-6f;  // RGBE quantizes
+        EXPECT_NEAR(t.r, e[0], tol);
+        EXPECT_NEAR(t.b, e[2], std::string(ext) == ".hdr" ? 0.02f * e[2] : 1e-6f);
+      }
+  }
+  // A single-channel image is grey.
+  const std::string grey = (dir / "grey.exr").string();
+  write_image(grey, 4, 2, 1, std::vector<float>(8, 3.0f));
+  const Rgb g = EnvironmentMap::load(grey).texel(1, 1);
+  EXPECT_FLOAT_EQ(g.r, 3.0f);
+  EXPECT_FLOAT_EQ(g.g, 3.0f);
+  fs::remove_all(dir);
+}
+
+TEST(EnvironmentMap, BadFilesGiveClearErrors) {
+  const fs::path dir = temp_dir();
+  // missing
+  std::string e = load_error((dir / "nope.exr").string());
+  EXPECT_NE(e.find("nope.exr"), std::string::npos) << e;
+  EXPECT_NE(e.find("no such file"), std::string::npos) << e;
+  // a directory
+  e = load_error(dir.string());
+  EXPECT_NE(e.find("directory"), std::string::npos) << e;
+  // zero bytes
+  const std::string empty = (dir / "empty.exr").string();
+  std::ofstream(empty).close();
+  e = load_error(empty);
+  EXPECT_NE(e.find("empty"), std::string::npos) << e;
+  // text with an image extension
+  for (const char* name : {"text.exr", "text.hdr", "text.png"}) {
+    const std::string p = (dir / name).string();
+    std::ofstream(p) << "this is not an image\n";
+    e = load_error(p);
+    EXPECT_NE(e.find(name), std::string::npos) << e;
+  }
+  // truncated EXR and HDR
+  for (const char* ext : {".exr", ".hdr"}) {
+    const std::string full = (dir / (std::string("full") + ext)).string();
+    std::vector<float> px(64 * 32 * 3);
+    for (std::size_t i = 0; i < px.size(); ++i) px[i] = float(i % 13) + 0.1f * float(i % 5);
+    write_image(full, 64, 32, 3, px);
+    const std::string cut = (dir / (std::string("cut") + ext)).string();
+    {
+      std::ifstream in(full, std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      std::ofstream(cut, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 3));
+    }
+    e = load_error(cut);
+    EXPECT_NE(e.find("cut"), std::string::npos) << ext << ": " << (e.empty() ? "loaded without error" : e);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(EnvironmentMap, RepairsNanInfAndNegativeTexels) {
+  std::vector<float> px = {1, 2, 3, std::nanf(""), 1, 1, INFINITY, -INFINITY, 1, -5, 0.5f, 1};
+  const EnvironmentMap m = EnvironmentMap::from_pixels(2, 2, px, {});
+  EXPECT_EQ(m.load_report().nan_texels, 1u);
+  EXPECT_EQ(m.load_report().inf_texels, 2u);
+  EXPECT_EQ(m.load_report().negative_texels, 1u);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 2; ++x) {
+      const Rgb t = m.texel(x, y);
+      EXPECT_TRUE(std::isfinite(t.r) && std::isfinite(t.g) && std::isfinite(t.b) && t.r >= 0 && t.g >= 0 && t.b >= 0);
+    }
+  std::mt19937_64 rng(2);
+  for (int i = 0; i < 1000; ++i) {
+    const Rgb L = m.eval(random_direction(rng));
+    ASSERT_TRUE(std::isfinite(L.r) && L.r >= 0);
+  }
+  EXPECT_EQ(m.eval({0, 0, 0}).r, 0.0f);
+  EXPECT_EQ(m.eval({std::nanf(""), 0, 1}).r, 0.0f);
+}
+
+TEST(EnvironmentMap, LatLongConventionAndBilinearFiltering) {
+  const int w = 16, h = 8;
+  const auto m = synthetic_latlong(w, h, [](int x, int y) { return float(x + 100 * y); });
+  // Texel centres return the texel.
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const Vec3 d = latlong_to_direction({(x + 0.5f) / w, (y + 0.5f) / h});
+      EXPECT_NEAR(m.eval(d).r, float(x + 100 * y), 1e-3f) << x << "," << y;
+    }
+  // Half-way between two texel centres: the average. The u seam wraps.
+  EXPECT_NEAR(m.eval(latlong_to_direction({3.0f / w, 2.5f / h})).r, 202.5f, 1e-3f);
+  EXPECT_NEAR(m.eval(latlong_to_direction({0.0f, 2.5f / h})).r, 0.5f * (200 + 215), 1e-2f);
+  // +Z is up: the top row; azimuth 0 is +X.
+  EXPECT_EQ(direction_to_latlong({0, 0, 1}).y, 0.0f);
+  EXPECT_NEAR(direction_to_latlong({1, 0, 0}).x, 0.0f, 1e-6f);
+  EXPECT_NEAR(direction_to_latlong({0, 1, 0}).x, 0.25f, 1e-6f);
+  // Rotation about Z and scale.
+  EnvironmentMapOptions o;
+  o.rotation = Mat3::rotate_z(90);
+  o.scale = 2;
+  const auto r = synthetic_latlong(w, h, [](int x, int y) { return float(x + 100 * y); }, o);
+  const Vec3 d = latlong_to_direction({4.5f / w, 3.5f / h});
+  EXPECT_NEAR(r.eval(o.rotation * d).r, 2 * m.eval(d).r, 1e-2f);
+}
+
+TEST(EnvironmentMap, EqualAreaLayoutIsContinuousAcrossEdges) {
+  const int n = 32;
+  const auto m = synthetic_latlong(n, n, [](int x, int y) { return std::sin(0.3f * x) + std::cos(0.2f * y) + 3; });
+  ASSERT_EQ(m.layout(), MapLayout::EqualArea);
+  // Texel centres return the texel.
+  EXPECT_NEAR(m.eval(equal_area_square_to_sphere({5.5f / n, 7.5f / n})).r, std::sin(1.5f) + std::cos(1.4f) + 3, 1e-4f);
+  // Radiance is continuous across the square's edges (they are seams on the sphere).
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (int i = 0; i < 2000; ++i) {
+    const float t = U(rng);
+    for (Point2 p : {Point2{0.0f, t}, Point2{1.0f, t}, Point2{t, 0.0f}, Point2{t, 1.0f}}) {
+      const Vec3 d = equal_area_square_to_sphere(p);
+      const Vec3 inside = equal_area_square_to_sphere({std::clamp(p.x, 1e-4f, 1 - 1e-4f), std::clamp(p.y, 1e-4f, 1 - 1e-4f)});
+      // a point just across the seam: perturb the direction slightly the other way
+      const Vec3 across = normalize(d * 2.0f - inside);
+      ASSERT_NEAR(m.eval(inside).r, m.eval(across).r, 0.05f) << p.x << "," << p.y;
+    }
+  }
+  EXPECT_THROW(EnvironmentMap::from_pixels(4, 2, std::vector<float>(24, 1.0f), {MapLayout::EqualArea}), Error);
+}
+
+TEST(EnvironmentMap, OptionsAndLayoutParsing) {
+  EXPECT_EQ(parse_map_layout("latlong"), MapLayout::LatLong);
+  EXPECT_EQ(parse_map_layout("equal-area"), MapLayout::EqualArea);
+  EXPECT_THROW(parse_map_layout("cube"), Error);
+  EnvironmentMapOptions o;
+  o.scale = -1;
+  EXPECT_THROW(EnvironmentMap::from_pixels(2, 1, std::vector<float>(6, 1.0f), o), Error);
+  o.scale = std::nanf("");
+  EXPECT_THROW(EnvironmentMap::from_pixels(2, 1, std::vector<float>(6, 1.0f), o), Error);
+  EXPECT_THROW(EnvironmentMap::from_pixels(0, 1, {}, {}), Error);
+  EXPECT_THROW(EnvironmentMap::from_pixels(2, 2, std::vector<float>(5, 1.0f), {}), Error);
+  // Odd aspect ratios load as lat-long.
+  EXPECT_EQ(EnvironmentMap::from_pixels(3, 1, std::vector<float>(9, 1.0f), {}).layout(), MapLayout::LatLong);
+  EXPECT_EQ(EnvironmentMap::from_pixels(1, 1000, std::vector<float>(3000, 1.0f), {}).layout(), MapLayout::LatLong);
+  // Huge texels times a scale do not overflow to infinity.
+  o.scale = 1e10f;
+  const auto big = EnvironmentMap::from_pixels(2, 1, std::vector<float>(6, 1e30f), o);
+  EXPECT_FLOAT_EQ(big.texel(0, 0).r, 1e30f);
+  EXPECT_TRUE(std::isfinite(big.eval({0, 0, 1}).average()));
+}
