@@ -1,0 +1,58 @@
+// A pinhole perspective camera built from look-at parameters (+Z is the world's up by default).
+#pragma once
+
+#include <cmath>
+
+#include "envpis/common.h"
+#include "render/math.h"
+
+namespace envpis::render {
+
+struct CameraSpec {
+  Vec3 from{0, -10, 0};
+  Vec3 to{0, 0, 0};
+  Vec3 up{0, 0, 1};
+  float vfov_degrees = 40.0f;  ///< full vertical field of view
+  int width = 640;             ///< default image size (the render options may override it)
+  int height = 360;
+};
+
+class Camera {
+ public:
+  Camera() = default;
+  /// Throws envpis::Error for a degenerate specification (from == to, up parallel to the view
+  /// direction, fov outside (0, 180)).
+  Camera(const CameraSpec& spec, int width, int height) : width_(width), height_(height) {
+    const Vec3 d = spec.to - spec.from;
+    if (!is_valid_direction(d)) throw Error("camera: 'from' and 'to' must differ");
+    if (!(spec.vfov_degrees > 0 && spec.vfov_degrees < 180)) throw Error("camera: fov must be in (0, 180) degrees");
+    if (!is_valid_direction(spec.up)) throw Error("camera: 'up' must be a non-zero vector");
+    if (width <= 0 || height <= 0) throw Error("camera: image size must be positive");
+    origin_ = spec.from;
+    forward_ = normalize(d);
+    const Vec3 r = cross(forward_, normalize(spec.up));
+    if (!(length(r) > 1e-6f)) throw Error("camera: 'up' is parallel to the view direction");
+    right_ = normalize(r);
+    up_ = cross(right_, forward_);
+    tan_half_ = std::tan(0.5f * spec.vfov_degrees * kPi / 180.0f);
+    aspect_ = float(width) / float(height);
+  }
+
+  /// Primary ray through film position (fx, fy) in pixels: (0, 0) is the top-left corner of the
+  /// image, (width, height) the bottom-right one.
+  Ray generate_ray(float fx, float fy) const {
+    const float sx = (2.0f * fx / float(width_) - 1.0f) * tan_half_ * aspect_;
+    const float sy = (1.0f - 2.0f * fy / float(height_)) * tan_half_;
+    return {origin_, normalize(forward_ + right_ * sx + up_ * sy), kInfinity};
+  }
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  int width_ = 1, height_ = 1;
+  Vec3 origin_, forward_{0, 1, 0}, right_{1, 0, 0}, up_{0, 0, 1};
+  float tan_half_ = 1, aspect_ = 1;
+};
+
+}  // namespace envpis::render

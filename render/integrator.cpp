@@ -1,0 +1,117 @@
+#include "render/integrator.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace envpis::render {
+
+IntegratorKind parse_integrator(const std::string& s) {
+  if (s == "direct") return IntegratorKind::Direct;
+  if (s == "path") return IntegratorKind::Path;
+  throw Error("unknown integrator '" + s + "' (expected direct or path)");
+}
+
+const char* to_string(IntegratorKind k) { return k == IntegratorKind::Direct ? "direct" : "path"; }
+
+Integrator::Integrator(const Scene& scene, const IntegratorOptions& options)
+    : scene_(scene), env_(scene.environment()), options_(options) {
+  if (options_.max_depth < 1) throw Error("max depth must be at least 1");
+  if (options_.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
+}
+
+float Integrator::mis_weight(float pdf_f, float pdf_g) const {
+  return options_.heuristic == Heuristic::Power ? power_heuristic(1, pdf_f, 1, pdf_g)
+                                                : balance_heuristic(1, pdf_f, 1, pdf_g);
+}
+
+namespace {
+// Same side of the geometric normal as the shading frame says (no light leaks through shading normals).
+inline bool sides_agree(Vec3 wi, Vec3 ng, float local_z) { return (dot(wi, ng) > 0) == (local_z > 0); }
+}  // namespace
+
+Rgb Integrator::li(const Ray& camera_ray, SampleRng& rng, LightSampler& light) const {
+  Rgb L{0, 0, 0};
+  SurfaceHit hit;
+  if (!scene_.intersect(camera_ray, &hit)) return env_.eval(camera_ray.direction);
+
+  const bool path = options_.kind == IntegratorKind::Path;
+  const int max_depth = path ? options_.max_depth : 1;
+  Rgb beta{1, 1, 1};
+  Vec3 wo = -camera_ray.direction;
+  for (int depth = 0; depth < max_depth; ++depth) {
+    rng.set_dimension(kPixelDimensions + kDimensionsPerVertex * static_cast<unsigned>(depth));
+    const Point2 u_light = rng.next2d();
+    const Point2 u_bsdf = rng.next2d();
+    const float u_lobe = rng.next1d();
+    const float u_rr = rng.next1d();
+
+    const SceneMaterial& mat = scene_.material(hit.material);
+    Vec3 ng = hit.ng, ns = hit.ns;
+    if (!mat.transmissive && dot(wo, ng) < 0) {  // opaque materials are two-sided
+      ng = -ng;
+      ns = -ns;
+    }
+    if ((dot(wo, ns) > 0) != (dot(wo, ng) > 0)) ns = ng;  // shading normal facing away from the viewer
+    const Frame frame(ns);
+    const Vec3 wo_l = frame.to_local(wo);
+
+    // 1. Light sample.
+    if (light.has_light_samples()) {
+      ShadingContext sc;
+      sc.n = ns;
+      sc.wo = wo;
+      sc.wo_local = wo_l;
+      sc.frame = &frame;
+      sc.bsdf = &mat.bsdf;
+      sc.jitter = rng.stream(static_cast<unsigned>(depth));
+      sc.opaque = !mat.transmissive;
+      light.prepare(sc);
+      const DirectionSample ls = light.sample(u_light);
+      if (ls.pdf > 0 && std::isfinite(ls.pdf) && is_valid_direction(ls.direction)) {
+        const Vec3 wi = ls.direction;
+        const Vec3 wi_l = frame.to_local(wi);
+        const bool above = dot(wi, ng) > 0;
+        if ((mat.transmissive || above) && sides_agree(wi, ng, wi_l.z)) {
+          const Rgb f = mat.bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
+          if (!is_black(f)) {
+            const Rgb Le = env_.eval(wi);
+            if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
+              const float w = light.uses_mis() ? mis_weight(ls.pdf, mat.bsdf.pdf(wo_l, wi_l)) : 1.0f;
+              L += beta * f * Le * (w / ls.pdf);
+            }
+          }
+        }
+      }
+    }
+
+    // 2. BSDF sample: adds the environment if it escapes, otherwise continues the path.
+    const std::optional<BsdfSample> bs = mat.bsdf.sample(wo_l, u_bsdf, u_lobe);
+    if (!bs || !(bs->pdf > 0) || !is_finite(bs->weight) || is_black(bs->weight)) break;
+    const Vec3 wi = frame.to_world(bs->wi);
+    if (!is_valid_direction(wi)) break;
+    if ((!mat.transmissive && dot(wi, ng) <= 0) || !sides_agree(wi, ng, bs->wi.z)) break;
+    const Rgb beta_next = beta * bs->weight;
+    Ray next{offset_ray_origin(hit.p, hit.ng, wi), normalize(wi), kInfinity};
+    SurfaceHit next_hit;
+    if (!scene_.intersect(next, &next_hit)) {
+      if (light.bsdf_hits_count()) {
+        float w = 1.0f;
+        if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction));
+        L += beta_next * env_.eval(next.direction) * w;
+      }
+      break;
+    }
+    beta = beta_next;
+    if (depth + 1 >= max_depth) break;
+    if (depth + 1 >= options_.rr_depth) {
+      const float q = std::min(0.95f, max_component(beta));
+      if (!(u_rr < q)) break;
+      beta = beta / q;
+    }
+    hit = next_hit;
+    wo = -next.direction;
+  }
+  return L;
+}
+
+}  // namespace envpis::render

@@ -1,0 +1,56 @@
+// The integrators: environment lighting only (the scene has no emitting surface).
+//
+//   direct  one bounce: the camera ray's first hit gathers environment light with the strategy's
+//           light sample and one BSDF sample (combined by MIS for mis, mis-comp, product, oracle),
+//           with shadow rays. Camera rays that miss see the environment.
+//   path    the same estimate at every vertex of a path continued by BSDF sampling, Russian roulette
+//           from depth rr_depth on, at most max_depth surface interactions.
+//
+// Per vertex, for a strategy with light samples: one light sample (weight w_l / p_l) and one BSDF
+// sample; the BSDF sample's direction, if it reaches the environment, adds its radiance with weight
+// w_b (0 for `env`, 1 for `bsdf`), and otherwise continues the path. `direct` is `path` with
+// max_depth 1 and no Russian roulette.
+//
+// Light samples that arrive below the surface (of an opaque material), that have pdf 0, or whose
+// geometric and shading sides disagree contribute nothing.
+#pragma once
+
+#include <string>
+
+#include "render/rng.h"
+#include "render/scene.h"
+#include "render/strategy.h"
+
+namespace envpis::render {
+
+enum class IntegratorKind { Direct, Path };
+IntegratorKind parse_integrator(const std::string& s);  ///< "direct" | "path"
+const char* to_string(IntegratorKind k);
+
+struct IntegratorOptions {
+  IntegratorKind kind = IntegratorKind::Path;
+  Heuristic heuristic = Heuristic::Power;
+  int max_depth = 8;  ///< path: maximum number of surface interactions (>= 1)
+  int rr_depth = 3;   ///< path: Russian roulette from this many interactions on
+};
+
+/// Random-number dimensions used by one pixel sample: 2 for the pixel position, then a fixed block
+/// per path vertex (so a vertex's numbers do not depend on what earlier vertices consumed).
+constexpr unsigned kPixelDimensions = 2;
+constexpr unsigned kDimensionsPerVertex = 8;
+
+class Integrator {
+ public:
+  Integrator(const Scene& scene, const IntegratorOptions& options);
+  /// Radiance arriving along the camera ray.
+  Rgb li(const Ray& camera_ray, SampleRng& rng, LightSampler& light) const;
+  const IntegratorOptions& options() const { return options_; }
+
+ private:
+  float mis_weight(float pdf_f, float pdf_g) const;
+  const Scene& scene_;
+  const EnvironmentMap& env_;
+  IntegratorOptions options_;
+};
+
+}  // namespace envpis::render

@@ -1,0 +1,196 @@
+#include "render/render.h"
+
+#include <OpenImageIO/imageio.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <optional>
+
+#include "render/rng.h"
+
+namespace envpis::render {
+
+void validate(const RenderOptions& o) {
+  if (o.spp <= 0) throw Error("spp must be positive, got " + std::to_string(o.spp));
+  if (o.spp > kMaxSpp) throw Error("spp must be at most " + std::to_string(kMaxSpp));
+  if (o.width < 0 || o.height < 0) throw Error("width and height must be positive");
+  if (o.width > kMaxImageSide || o.height > kMaxImageSide)
+    throw Error("width and height must be at most " + std::to_string(kMaxImageSide));
+  if (std::int64_t(o.width) * o.height > kMaxImagePixels) throw Error("image too large");
+  if (o.threads < 0) throw Error("threads must be >= 0 (0 = all), got " + std::to_string(o.threads));
+  if (o.max_depth < 1) throw Error("max depth must be at least 1, got " + std::to_string(o.max_depth));
+  if (o.max_depth > 1024) throw Error("max depth must be at most 1024");
+  if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
+  if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
+  if (o.tables && o.tables->strategy != o.strategy)
+    throw Error(std::string("prebuilt tables are for strategy ") + to_string(o.tables->strategy) + ", not " +
+                to_string(o.strategy));
+}
+
+RenderResult render(const Scene& scene, const RenderOptions& options) {
+  validate(options);
+  if (!scene.committed()) throw Error("render: the scene is not committed");
+  const int W = options.width > 0 ? options.width : scene.camera().width;
+  const int H = options.height > 0 ? options.height : scene.camera().height;
+  if (W <= 0 || H <= 0 || W > kMaxImageSide || H > kMaxImageSide || std::int64_t(W) * H > kMaxImagePixels)
+    throw Error("invalid image size " + std::to_string(W) + "x" + std::to_string(H));
+  const Camera camera(scene.camera(), W, H);
+
+  RenderResult r;
+  r.width = W;
+  r.height = H;
+  r.spp = options.spp;
+  r.strategy = options.strategy;
+  r.integrator = options.integrator;
+  const std::size_t npix = static_cast<std::size_t>(W) * H;
+  r.rgb.assign(npix * 3, 0.0f);
+  r.variance.assign(npix, 0.0f);
+  r.object_id.assign(npix, -1);
+  r.samples = static_cast<std::uint64_t>(npix) * static_cast<std::uint64_t>(options.spp);
+
+  std::optional<StrategyTables> own;
+  const StrategyTables* tables = options.tables;
+  if (!tables) {
+    own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product);
+    tables = &*own;
+    r.setup_seconds = own->build_seconds;
+  }
+
+  IntegratorOptions io;
+  io.kind = options.integrator;
+  io.heuristic = options.heuristic;
+  io.max_depth = options.max_depth;
+  io.rr_depth = options.rr_depth;
+  const Integrator integrator(scene, io);
+
+  const int ts = options.tile_size;
+  const int tiles_x = (W + ts - 1) / ts, tiles_y = (H + ts - 1) / ts;
+  const int tiles = tiles_x * tiles_y;
+  std::atomic<int> done{0};
+  std::atomic<std::size_t> nonfinite{0};
+  std::mutex progress_mutex;
+  int last_reported = -1;
+
+  tbb::enumerable_thread_specific<std::optional<LightSampler>> samplers;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto body = [&] {
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, tiles, 1),
+        [&](const tbb::blocked_range<int>& range) {
+          auto& slot = samplers.local();
+          if (!slot) slot.emplace(*tables);
+          LightSampler& light = *slot;
+          for (int tile = range.begin(); tile < range.end(); ++tile) {
+            const int x0 = (tile % tiles_x) * ts, y0 = (tile / tiles_x) * ts;
+            const int x1 = std::min(W, x0 + ts), y1 = std::min(H, y0 + ts);
+            for (int y = y0; y < y1; ++y)
+              for (int x = x0; x < x1; ++x) {
+                const std::size_t pix = static_cast<std::size_t>(y) * W + x;
+                double sum[3] = {0, 0, 0};
+                double sum_avg = 0, sum_avg2 = 0;
+                for (int s = 0; s < options.spp; ++s) {
+                  SampleRng rng(options.seed, pix, static_cast<std::uint64_t>(s));
+                  const Point2 jitter = rng.next2d();
+                  const Ray ray = camera.generate_ray(float(x) + jitter.x, float(y) + jitter.y);
+                  const Rgb L = integrator.li(ray, rng, light);
+                  sum[0] += L.r;
+                  sum[1] += L.g;
+                  sum[2] += L.b;
+                  const double a = (double(L.r) + L.g + L.b) / 3.0;
+                  sum_avg += a;
+                  sum_avg2 += a * a;
+                }
+                const double n = options.spp;
+                float* out = &r.rgb[pix * 3];
+                bool finite = true;
+                for (int c = 0; c < 3; ++c) {
+                  out[c] = static_cast<float>(sum[c] / n);
+                  finite = finite && std::isfinite(out[c]);
+                }
+                const double mean = sum_avg / n;
+                const double var = n > 1 ? std::max(0.0, (sum_avg2 - n * mean * mean) / (n - 1)) / n : 0.0;
+                r.variance[pix] = static_cast<float>(var);
+                if (!finite || !std::isfinite(r.variance[pix])) {
+                  out[0] = out[1] = out[2] = 0.0f;
+                  r.variance[pix] = 0.0f;
+                  nonfinite.fetch_add(1, std::memory_order_relaxed);
+                }
+                SurfaceHit hit;
+                const Ray centre = camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
+                r.object_id[pix] = scene.intersect(centre, &hit) ? hit.object : -1;
+              }
+            const int d = done.fetch_add(1) + 1;
+            if (options.progress) {
+              std::lock_guard<std::mutex> lock(progress_mutex);
+              const int permille = static_cast<int>(1000.0 * d / tiles);
+              if (permille > last_reported) {  // threads may finish tiles out of order
+                last_reported = permille;
+                options.progress(double(d) / tiles);
+              }
+            }
+          }
+        },
+        tbb::simple_partitioner());
+  };
+  if (options.threads > 0) {
+    tbb::task_arena arena(options.threads);
+    arena.execute(body);
+  } else {
+    body();
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.nonfinite_pixels = nonfinite.load();
+  return r;
+}
+
+void write_exr(const std::string& path, const RenderResult& image) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());
+  OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"R", "G", "B"};
+  spec.attribute("compression", "zip");
+  spec.attribute("envpis:strategy", to_string(image.strategy));
+  spec.attribute("envpis:integrator", to_string(image.integrator));
+  spec.attribute("envpis:spp", image.spp);
+  if (!out->open(path, spec)) throw Error("cannot write '" + path + "': " + out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data()))
+    throw Error("cannot write '" + path + "': " + out->geterror());
+  if (!out->close()) throw Error("cannot write '" + path + "': " + out->geterror());
+}
+
+void write_object_id(const std::string& path, const RenderResult& image) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());
+  OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"id"};
+  std::vector<float> ids(image.object_id.begin(), image.object_id.end());
+  if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ids.data()) || !out->close())
+    throw Error("cannot write '" + path + "': " + out->geterror());
+}
+
+std::vector<RegionMean> object_means(const RenderResult& image, int object_count) {
+  std::vector<RegionMean> m(static_cast<std::size_t>(std::max(0, object_count)));
+  for (int i = 0; i < object_count; ++i) m[i].object = i;
+  const std::size_t npix = static_cast<std::size_t>(image.width) * image.height;
+  for (std::size_t p = 0; p < npix; ++p) {
+    const int id = image.object_id[p];
+    if (id < 0 || id >= object_count) continue;
+    const float* c = &image.rgb[p * 3];
+    m[id].pixels += 1;
+    m[id].mean += (double(c[0]) + c[1] + c[2]) / 3.0;
+    m[id].variance += image.variance[p];
+  }
+  for (auto& x : m)
+    if (x.pixels > 0) {
+      x.mean /= double(x.pixels);
+      x.variance /= double(x.pixels) * double(x.pixels);
+    }
+  return m;
+}
+
+}  // namespace envpis::render

@@ -1,0 +1,91 @@
+// The render API: one call renders a scene with one strategy and returns the image, an object-id AOV
+// and timings. Used by `envpis render` and by tools that compare strategies (`envpis compare`).
+//
+//   Scene scene = make_scene("fig1", env);              // render/scenes.h
+//   RenderOptions o;  o.strategy = Strategy::Product;  o.spp = 64;
+//   RenderResult r = render(scene, o);                  // r.rgb, r.object_id, r.seconds
+//   write_exr("fig1-product.exr", r);
+//
+// Determinism: pixel (x, y), sample s uses random numbers keyed on (seed, y * width + x, s, dimension)
+// only, and each pixel is accumulated by one thread in sample order, so the image is bit-identical at
+// any thread count for the same seed.
+//
+// Pixel filter: a box filter over the pixel (each sample at a uniformly jittered position inside
+// the pixel, all samples weighted equally).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "render/integrator.h"
+#include "render/scene.h"
+#include "render/strategy.h"
+
+namespace envpis::render {
+
+constexpr int kMaxImageSide = 16384;
+constexpr std::int64_t kMaxImagePixels = std::int64_t(1) << 26;  // 67 M pixels
+constexpr int kMaxSpp = 1 << 24;
+
+struct RenderOptions {
+  Strategy strategy = Strategy::Mis;
+  IntegratorKind integrator = IntegratorKind::Path;
+  Heuristic heuristic = Heuristic::Power;
+  int spp = 16;
+  std::uint64_t seed = 0;
+  int width = 0, height = 0;  ///< 0: the scene camera's default size
+  int threads = 0;            ///< 0: all hardware threads (or the enclosing tbb limit)
+  int max_depth = 8;          ///< path integrator
+  int rr_depth = 3;           ///< path integrator: Russian roulette from this depth on
+  int tile_size = 16;
+  OracleOptions oracle;
+  ProductSamplerOptions product;
+  /// Prebuilt tables for this strategy and the scene's environment (e.g. shared between renders);
+  /// null: render() builds them (their time is reported in setup_seconds, not seconds).
+  const StrategyTables* tables = nullptr;
+  /// Called with the fraction of tiles done (0..1), from worker threads but never concurrently.
+  std::function<void(double)> progress;
+};
+
+struct RenderResult {
+  int width = 0, height = 0, spp = 0;
+  Strategy strategy = Strategy::Mis;
+  IntegratorKind integrator = IntegratorKind::Path;
+  std::vector<float> rgb;       ///< width * height * 3, row-major, top row first
+  std::vector<float> variance;  ///< per pixel: variance of the pixel's mean of (R+G+B)/3 (sample variance / spp)
+  std::vector<int> object_id;   ///< per pixel: object seen by the ray through the pixel centre, -1 = environment
+  double seconds = 0;           ///< wall seconds of the sampling loop
+  double setup_seconds = 0;     ///< wall seconds spent building tables (0 when prebuilt)
+  std::uint64_t samples = 0;    ///< width * height * spp
+  std::size_t nonfinite_pixels = 0;  ///< pixels whose estimate was NaN/Inf: set to 0
+
+  Rgb pixel(int x, int y) const {
+    const float* p = &rgb[(static_cast<std::size_t>(y) * width + x) * 3];
+    return {p[0], p[1], p[2]};
+  }
+};
+
+/// Throws Error for invalid options (spp, size, threads, depth) or an uncommitted scene.
+RenderResult render(const Scene& scene, const RenderOptions& options);
+
+/// Checks what render() would reject, without rendering (for early command-line validation).
+void validate(const RenderOptions& options);
+
+/// Writes a float (32-bit) RGB OpenEXR. Throws Error when the file cannot be written.
+void write_exr(const std::string& path, const RenderResult& image);
+/// Writes the object-id AOV as a one-channel float image (any format OpenImageIO writes).
+void write_object_id(const std::string& path, const RenderResult& image);
+
+/// Mean over the pixels of one object (by the object-id AOV) of (R+G+B)/3, with the variance of
+/// that mean from the per-pixel variances (pixels are independent).
+struct RegionMean {
+  int object = -1;
+  std::size_t pixels = 0;
+  double mean = 0;
+  double variance = 0;
+};
+std::vector<RegionMean> object_means(const RenderResult& image, int object_count);
+
+}  // namespace envpis::render

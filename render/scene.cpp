@@ -1,0 +1,247 @@
+#include "render/scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+#include <string>
+
+namespace envpis::render {
+
+struct Scene::Embree {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+
+  ~Embree() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+namespace {
+
+const char* embree_error_name(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_UNKNOWN: return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+  }
+  return "error";
+}
+
+void check_embree(RTCDevice device, const char* what) {
+  const RTCError err = rtcGetDeviceError(device);
+  if (err != RTC_ERROR_NONE) throw Error(std::string("embree: ") + what + " failed: " + embree_error_name(err));
+}
+
+}  // namespace
+
+Scene::Scene() = default;
+Scene::~Scene() = default;
+Scene::Scene(Scene&&) noexcept = default;
+Scene& Scene::operator=(Scene&&) noexcept = default;
+
+int Scene::add_material(std::string name, Material bsdf, bool transmissive) {
+  if (committed_) throw Error("scene: cannot add a material after commit()");
+  if (name.empty()) throw Error("scene: a material needs a name");
+  if (find_material(name) >= 0) throw Error("scene: duplicate material name '" + name + "'");
+  if (bsdf.empty()) throw Error("scene: material '" + name + "' has no lobe");
+  bsdf.set_name(name);
+  materials_.push_back({std::move(name), std::move(bsdf), transmissive});
+  return static_cast<int>(materials_.size()) - 1;
+}
+
+int Scene::find_material(const std::string& name) const {
+  for (std::size_t i = 0; i < materials_.size(); ++i)
+    if (materials_[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+int Scene::add_sphere(std::string name, Vec3 center, float radius, int material) {
+  if (committed_) throw Error("scene: cannot add an object after commit()");
+  if (!(radius > 0) || !std::isfinite(radius)) throw Error("scene: sphere '" + name + "' needs a positive radius");
+  if (!std::isfinite(center.x) || !std::isfinite(center.y) || !std::isfinite(center.z))
+    throw Error("scene: sphere '" + name + "' has a non-finite centre");
+  if (material < 0 || material >= material_count())
+    throw Error("scene: sphere '" + name + "' has an invalid material id");
+  ObjectInfo o;
+  o.name = std::move(name);
+  o.type = ObjectType::Sphere;
+  o.material = material;
+  o.center = center;
+  o.radius = radius;
+  objects_.push_back(std::move(o));
+  meshes_.emplace_back();
+  face_normals_.emplace_back();
+  return static_cast<int>(objects_.size()) - 1;
+}
+
+int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
+  if (committed_) throw Error("scene: cannot add an object after commit()");
+  if (material < 0 || material >= material_count())
+    throw Error("scene: mesh '" + name + "' has an invalid material id");
+  if (mesh.indices.empty() || mesh.indices.size() % 3 != 0)
+    throw Error("scene: mesh '" + name + "' has no triangle (or an index count that is not a multiple of 3)");
+  if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
+    throw Error("scene: mesh '" + name + "' has " + std::to_string(mesh.normals.size()) + " normals for " +
+                std::to_string(mesh.positions.size()) + " vertices");
+  for (const Vec3& p : mesh.positions)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw Error("scene: mesh '" + name + "' has a non-finite vertex");
+  for (std::uint32_t i : mesh.indices)
+    if (i >= mesh.positions.size()) throw Error("scene: mesh '" + name + "' has an out-of-range vertex index");
+  for (Vec3& n : mesh.normals) n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 0};
+
+  const std::size_t tris = mesh.indices.size() / 3;
+  std::vector<Vec3> fn(tris);
+  for (std::size_t t = 0; t < tris; ++t) {
+    const std::uint32_t* id = &mesh.indices[3 * t];
+    const Vec3 p0 = mesh.positions[id[0]], p1 = mesh.positions[id[1]], p2 = mesh.positions[id[2]];
+    Vec3 n = cross(p1 - p0, p2 - p0);
+    n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 1};
+    if (!mesh.normals.empty()) {
+      const Vec3 avg = mesh.normals[id[0]] + mesh.normals[id[1]] + mesh.normals[id[2]];
+      if (dot(avg, n) < 0) n = -n;
+    }
+    fn[t] = n;
+  }
+  ObjectInfo o;
+  o.name = std::move(name);
+  o.type = ObjectType::Mesh;
+  o.material = material;
+  o.triangles = tris;
+  objects_.push_back(std::move(o));
+  meshes_.push_back(std::move(mesh));
+  face_normals_.push_back(std::move(fn));
+  return static_cast<int>(objects_.size()) - 1;
+}
+
+void Scene::commit() {
+  if (committed_) return;
+  if (!env_) throw Error("scene: no environment map");
+  if (objects_.empty()) throw Error("scene: no object");
+  embree_ = std::make_unique<Embree>();
+  embree_->device = rtcNewDevice(nullptr);
+  if (!embree_->device) throw Error(std::string("embree: cannot create a device: ") + embree_error_name(rtcGetDeviceError(nullptr)));
+  RTCDevice dev = embree_->device;
+  embree_->scene = rtcNewScene(dev);
+  check_embree(dev, "rtcNewScene");
+  rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    const ObjectInfo& o = objects_[i];
+    RTCGeometry g;
+    if (o.type == ObjectType::Sphere) {
+      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+      check_embree(dev, "rtcNewGeometry(sphere)");
+      auto* v = static_cast<float*>(
+          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+      check_embree(dev, "sphere buffer");
+      v[0] = o.center.x;
+      v[1] = o.center.y;
+      v[2] = o.center.z;
+      v[3] = o.radius;
+    } else {
+      const TriangleMesh& m = meshes_[i];
+      g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+      check_embree(dev, "rtcNewGeometry(triangle)");
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                            3 * sizeof(float), m.positions.size()));
+      check_embree(dev, "vertex buffer");
+      for (std::size_t k = 0; k < m.positions.size(); ++k) {
+        v[3 * k] = m.positions[k].x;
+        v[3 * k + 1] = m.positions[k].y;
+        v[3 * k + 2] = m.positions[k].z;
+      }
+      auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                 3 * sizeof(unsigned), m.indices.size() / 3));
+      check_embree(dev, "index buffer");
+      for (std::size_t k = 0; k < m.indices.size(); ++k) idx[k] = m.indices[k];
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(embree_->scene, g, static_cast<unsigned>(i));
+    rtcReleaseGeometry(g);
+    check_embree(dev, "geometry commit");
+  }
+  rtcCommitScene(embree_->scene);
+  check_embree(dev, "rtcCommitScene");
+  committed_ = true;
+}
+
+bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = ray.origin.x;
+  rh.ray.org_y = ray.origin.y;
+  rh.ray.org_z = ray.origin.z;
+  rh.ray.dir_x = ray.direction.x;
+  rh.ray.dir_y = ray.direction.y;
+  rh.ray.dir_z = ray.direction.z;
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = ray.tmax;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(embree_->scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+
+  const int id = static_cast<int>(rh.hit.geomID);
+  const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
+  hit->t = rh.ray.tfar;
+  hit->object = id;
+  hit->material = o.material;
+  if (o.type == ObjectType::Sphere) {
+    const Vec3 p = ray.origin + ray.direction * rh.ray.tfar;
+    Vec3 n = p - o.center;
+    n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 1};
+    hit->p = o.center + n * o.radius;  // reprojected onto the sphere: less round-off than o + t d
+    hit->ng = n;
+    hit->ns = n;
+  } else {
+    const TriangleMesh& m = meshes_[static_cast<std::size_t>(id)];
+    const std::uint32_t* tri = &m.indices[3 * static_cast<std::size_t>(rh.hit.primID)];
+    const float u = rh.hit.u, v = rh.hit.v, w = 1.0f - u - v;
+    hit->p = m.positions[tri[0]] * w + m.positions[tri[1]] * u + m.positions[tri[2]] * v;
+    const Vec3 ng = face_normals_[static_cast<std::size_t>(id)][rh.hit.primID];
+    hit->ng = ng;
+    hit->ns = ng;
+    if (!m.normals.empty()) {
+      const Vec3 ns = m.normals[tri[0]] * w + m.normals[tri[1]] * u + m.normals[tri[2]] * v;
+      if (is_valid_direction(ns)) {
+        const Vec3 nn = normalize(ns);
+        if (dot(nn, ng) > 0) hit->ns = nn;
+      }
+    }
+  }
+  return true;
+}
+
+bool Scene::occluded(Vec3 origin, Vec3 dir, float tmax) const {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  r.org_x = origin.x;
+  r.org_y = origin.y;
+  r.org_z = origin.z;
+  r.dir_x = dir.x;
+  r.dir_y = dir.y;
+  r.dir_z = dir.z;
+  r.tnear = 0.0f;
+  r.tfar = tmax;
+  r.time = 0.0f;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+  rtcOccluded1(embree_->scene, &ctx, &r);
+  return r.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+}
+
+}  // namespace envpis::render

@@ -1,0 +1,114 @@
+// The renderer's scene: materials, objects (analytic spheres and triangle meshes) in an Embree 3
+// scene, a camera and the environment map that lights everything.
+//
+// Lifetime (Embree's): add materials and objects, set the camera and environment, then commit()
+// once; afterwards the scene is immutable and intersect()/occluded() are thread-safe.
+//
+// Orientation: a sphere's geometric normal points outwards. A mesh's geometric normal follows the
+// triangle winding (counter-clockwise seen from the front), unless the mesh has vertex normals: then
+// it is flipped where needed to agree with them. A dielectric's "outside" is where the normal points.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "envpis/envpis.h"
+#include "render/camera.h"
+#include "render/material.h"
+#include "render/math.h"
+
+namespace envpis::render {
+
+/// A material of the scene: the BSDF plus what the integrator must know about it.
+struct SceneMaterial {
+  std::string name;
+  Material bsdf;
+  /// True when the BSDF transmits light (dielectric, translucent): it is then one-sided (its frame
+  /// keeps the outward normal and wo may be below it). Opaque materials are two-sided: their frame
+  /// is flipped towards the viewer.
+  bool transmissive = false;
+};
+
+struct TriangleMesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;           ///< per vertex (same count as positions) or empty (flat shading)
+  std::vector<std::uint32_t> indices;  ///< three per triangle
+};
+
+enum class ObjectType { Sphere, Mesh };
+
+struct ObjectInfo {
+  std::string name;
+  ObjectType type = ObjectType::Sphere;
+  int material = 0;
+  Vec3 center;       ///< sphere centre (spheres only)
+  float radius = 0;  ///< sphere radius (spheres only)
+  std::size_t triangles = 0;
+};
+
+struct SurfaceHit {
+  float t = 0;
+  Vec3 p;       ///< hit point
+  Vec3 ng;      ///< unit geometric normal (outward / as authored, not flipped towards the ray)
+  Vec3 ns;      ///< unit shading normal, on the same side as ng
+  int object = -1;
+  int material = -1;
+};
+
+class Scene {
+ public:
+  Scene();
+  ~Scene();
+  Scene(Scene&&) noexcept;
+  Scene& operator=(Scene&&) noexcept;
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  /// Returns the material id. Names must be unique and the material non-empty (throws Error).
+  int add_material(std::string name, Material bsdf, bool transmissive);
+  /// Material id by name, or -1.
+  int find_material(const std::string& name) const;
+  const SceneMaterial& material(int id) const { return materials_[static_cast<std::size_t>(id)]; }
+  int material_count() const { return static_cast<int>(materials_.size()); }
+
+  /// Returns the object id (also its index in objects(), and the value of the object-id AOV).
+  int add_sphere(std::string name, Vec3 center, float radius, int material);
+  int add_mesh(std::string name, TriangleMesh mesh, int material);
+  const std::vector<ObjectInfo>& objects() const { return objects_; }
+
+  void set_camera(const CameraSpec& spec) { camera_ = spec; }
+  const CameraSpec& camera() const { return camera_; }
+  void set_environment(std::shared_ptr<const EnvironmentMap> env) { env_ = std::move(env); }
+  const EnvironmentMap& environment() const { return *env_; }
+  std::shared_ptr<const EnvironmentMap> environment_ptr() const { return env_; }
+  bool has_environment() const { return env_ != nullptr; }
+  /// A human-readable description of where the environment came from (file path or "procedural sky").
+  void set_environment_description(std::string d) { env_description_ = std::move(d); }
+  const std::string& environment_description() const { return env_description_; }
+
+  /// Builds the Embree acceleration structure. Throws Error when there is no environment, no object
+  /// or Embree fails.
+  void commit();
+  bool committed() const { return committed_; }
+
+  /// Closest hit along the ray in (0, ray.tmax). Returns false on a miss.
+  bool intersect(const Ray& ray, SurfaceHit* hit) const;
+  /// True if anything blocks the segment (origin, origin + dir * tmax).
+  bool occluded(Vec3 origin, Vec3 dir, float tmax = kInfinity) const;
+
+ private:
+  struct Embree;
+  std::unique_ptr<Embree> embree_;
+  std::vector<SceneMaterial> materials_;
+  std::vector<ObjectInfo> objects_;
+  std::vector<TriangleMesh> meshes_;  // indexed like objects_ (empty for spheres)
+  std::vector<std::vector<Vec3>> face_normals_;
+  CameraSpec camera_;
+  std::shared_ptr<const EnvironmentMap> env_;
+  std::string env_description_;
+  bool committed_ = false;
+};
+
+}  // namespace envpis::render

@@ -1,0 +1,211 @@
+#include "render/strategy.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "render/rng.h"
+
+namespace envpis::render {
+
+Strategy parse_strategy(const std::string& s) {
+  for (Strategy k : all_strategies())
+    if (s == to_string(k)) return k;
+  throw Error("unknown strategy '" + s + "' (expected bsdf, env, mis, mis-comp, product or oracle)");
+}
+
+const char* to_string(Strategy s) {
+  switch (s) {
+    case Strategy::Bsdf: return "bsdf";
+    case Strategy::Env: return "env";
+    case Strategy::Mis: return "mis";
+    case Strategy::MisComp: return "mis-comp";
+    case Strategy::Product: return "product";
+    case Strategy::Oracle: return "oracle";
+  }
+  return "?";
+}
+
+const std::vector<Strategy>& all_strategies() {
+  static const std::vector<Strategy> all{Strategy::Bsdf,    Strategy::Env,     Strategy::Mis,
+                                         Strategy::MisComp, Strategy::Product, Strategy::Oracle};
+  return all;
+}
+
+Heuristic parse_heuristic(const std::string& s) {
+  if (s == "power") return Heuristic::Power;
+  if (s == "balance") return Heuristic::Balance;
+  throw Error("unknown MIS heuristic '" + s + "' (expected power or balance)");
+}
+
+const char* to_string(Heuristic h) { return h == Heuristic::Power ? "power" : "balance"; }
+
+StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
+                                     const ProductSamplerOptions& product) {
+  const auto t0 = std::chrono::steady_clock::now();
+  StrategyTables t;
+  t.strategy = strategy;
+  t.oracle = oracle;
+  t.product = product;
+  if (strategy == Strategy::Oracle) {
+    if (oracle.resolution < 1 || oracle.resolution > 256)
+      throw Error("oracle resolution must be in 1..256, got " + std::to_string(oracle.resolution));
+    const int k = static_cast<int>(std::lround(std::sqrt(double(oracle.directions))));
+    if (oracle.directions < 1 || k * k != oracle.directions || k > 16)
+      throw Error("oracle directions per cell must be a square number in 1..256, got " +
+                  std::to_string(oracle.directions));
+  }
+  ImportanceTableOptions opt;
+  switch (strategy) {
+    case Strategy::Bsdf: break;
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::Product: t.table = std::make_shared<ImportanceTable>(env, opt); break;
+    case Strategy::MisComp:
+      opt.compensated = true;
+      t.table = std::make_shared<ImportanceTable>(env, opt);
+      break;
+    case Strategy::Oracle:
+      opt.top_resolution = oracle.resolution;
+      t.table = std::make_shared<ImportanceTable>(env, opt);
+      break;
+  }
+  t.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return t;
+}
+
+LightSampler::LightSampler(const StrategyTables& tables)
+    : strategy_(tables.strategy), table_(tables.table.get()), oracle_(tables.oracle) {
+  if (strategy_ == Strategy::Product && table_) product_ = std::make_unique<ProductSampler>(*table_, tables.product);
+  if (strategy_ == Strategy::Oracle && table_) {
+    const std::size_t cells = static_cast<std::size_t>(table_->cell_count());
+    const std::size_t n = cells * static_cast<std::size_t>(oracle_.directions);
+    su_.resize(n);
+    sv_.resize(n);
+    dx_.resize(n);
+    dy_.resize(n);
+    dz_.resize(n);
+    cell_weight_.resize(cells);
+    cell_cdf_.resize(cells);
+    active_.reserve(cells);
+  }
+}
+
+LightSampler::LightSampler(LightSampler&&) noexcept = default;
+LightSampler::~LightSampler() = default;
+
+void LightSampler::prepare(const ShadingContext& sc) {
+  if (strategy_ == Strategy::Product) {
+    if (!product_) return;
+    BsdfProxy proxy;
+    sc.bsdf->fill_proxy(proxy, sc.wo_local);
+    product_->prepare(sc.n, sc.wo, proxy);
+    return;
+  }
+  if (strategy_ != Strategy::Oracle || !table_) return;
+
+  // Oracle: weight each top cell by E[c] times the average of the true f * |cos| at k x k stratified
+  // directions inside it (one random offset per shading point, shared by all cells' strata).
+  oracle_valid_ = false;
+  const int R = table_->top_resolution();
+  const int k = static_cast<int>(std::lround(std::sqrt(double(oracle_.directions))));
+  const int per_cell = k * k;
+  const int cells = R * R;
+  // Cells to evaluate: positive environment importance, and (for reflection-only materials) a cone
+  // not entirely below the surface (angle(axis, n) >= 90 deg + half-angle <=> cos <= -sin(half-angle)).
+  active_.clear();
+  for (int c = 0; c < cells; ++c) {
+    if (!(table_->cell_probability(c) > 0)) continue;
+    if (sc.opaque) {
+      const Cone& cone = table_->cell_cone(c);
+      if (dot(cone.axis, sc.n) <= -cone.sin_half_angle) continue;
+    }
+    active_.push_back(c);
+  }
+  const float ox = float(sc.jitter >> 40) * 0x1p-24f;
+  const float oy = float((sc.jitter >> 16) & 0xffffff) * 0x1p-24f;
+  const float inv_r = 1.0f / float(R), inv_k = 1.0f / float(k);
+  std::size_t i = 0;
+  for (int c : active_) {
+    const int cx = c % R, cy = c / R;
+    for (int sy = 0; sy < k; ++sy)
+      for (int sx = 0; sx < k; ++sx, ++i) {
+        su_[i] = std::min((float(cx) + (float(sx) + ox) * inv_k) * inv_r, 1.0f);
+        sv_[i] = std::min((float(cy) + (float(sy) + oy) * inv_k) * inv_r, 1.0f);
+      }
+  }
+  equal_area_square_to_sphere(i, su_.data(), sv_.data(), dx_.data(), dy_.data(), dz_.data());
+  std::fill(cell_weight_.begin(), cell_weight_.end(), 0.0f);
+  for (std::size_t a = 0; a < active_.size(); ++a) {
+    const int c = active_[a];
+    float acc = 0;
+    const std::size_t base = a * static_cast<std::size_t>(per_cell);
+    for (int s = 0; s < per_cell; ++s) {
+      const Vec3 wi{dx_[base + s], dy_[base + s], dz_[base + s]};
+      const Vec3 wl = sc.frame->to_local(wi);
+      if (sc.opaque && !(wl.z > 0)) continue;
+      const Rgb f = sc.bsdf->eval(sc.wo_local, wl);
+      acc += f.average() * std::fabs(wl.z);
+    }
+    const float w = table_->cell_probability(c) * acc / float(per_cell);
+    cell_weight_[c] = w > 0 && std::isfinite(w) ? w : 0.0f;
+  }
+  float running = 0;
+  for (int c = 0; c < cells; ++c) {
+    running += cell_weight_[c];
+    cell_cdf_[c] = running;
+  }
+  cell_total_ = running;
+  oracle_valid_ = running > 0 && std::isfinite(running);
+}
+
+DirectionSample LightSampler::sample(Point2 u) const {
+  switch (strategy_) {
+    case Strategy::Bsdf: return {};
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::MisComp: return table_ ? table_->sample(u) : DirectionSample{};
+    case Strategy::Product: return product_ ? product_->sample(u) : DirectionSample{};
+    case Strategy::Oracle: {
+      if (!oracle_valid_) return {};
+      const int cells = static_cast<int>(cell_cdf_.size());
+      const float target = u.x * cell_total_;
+      int c = static_cast<int>(std::upper_bound(cell_cdf_.begin(), cell_cdf_.end(), target) - cell_cdf_.begin());
+      if (c >= cells) {  // round-off at the top end: the last cell with positive weight
+        c = cells - 1;
+        while (c > 0 && !(cell_weight_[c] > 0)) --c;
+      }
+      const float lo = c > 0 ? cell_cdf_[c - 1] : 0.0f;
+      const float ux = std::clamp((target - lo) / cell_weight_[c], 0.0f, 0x1.fffffep-1f);
+      const Point2 p = table_->sample_in_cell(c, {ux, u.y}, nullptr);
+      DirectionSample s;
+      s.direction = equal_area_square_to_sphere(p);
+      s.pdf = pdf(s.direction);  // the same function MIS evaluates (robust to round-off at cell edges)
+      s.cell = c;
+      if (!(s.pdf > 0) || !std::isfinite(s.pdf)) return {};
+      return s;
+    }
+  }
+  return {};
+}
+
+float LightSampler::pdf(Vec3 wi) const {
+  switch (strategy_) {
+    case Strategy::Bsdf: return 0;
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::MisComp: return table_ ? table_->pdf(wi) : 0.0f;
+    case Strategy::Product: return product_ ? product_->pdf(wi) : 0.0f;
+    case Strategy::Oracle: {
+      if (!oracle_valid_ || !is_valid_direction(wi)) return 0;
+      const Point2 p = equal_area_sphere_to_square(wi);
+      const int c = table_->cell_of(p);
+      if (!(cell_weight_[c] > 0)) return 0;
+      const float R = float(table_->top_resolution());
+      return cell_weight_[c] / cell_total_ * table_->pdf_in_cell(c, p) * R * R * kInv4Pi;
+    }
+  }
+  return 0;
+}
+
+}  // namespace envpis::render

@@ -1,0 +1,111 @@
+// The light-sampling strategies compared by the renderer (DESIGN.md section 4). Each is a pair of
+// (light distribution, whether BSDF sampling is combined with it by MIS):
+//
+//   bsdf      BSDF sampling only; no light sample.
+//   env       light samples from the environment's ImportanceTable only; BSDF-sampled directions
+//             carry no environment radiance (in the path integrator they only continue the path).
+//   mis       ImportanceTable + BSDF sampling, MIS (the paper's baseline).
+//   mis-comp  a compensated ImportanceTable (Karlik et al. 2019: max(0, importance - mean)) + BSDF
+//             sampling, MIS (pbrt-v4's default: a stronger baseline).
+//   product   the library's ProductSampler (environment x BSDF proxy) + BSDF sampling, MIS.
+//   oracle    a per-shading-point product of the environment and the TRUE BSDF * |cos| over the
+//             top cells of a finer table (64 x 64 by default), then the table's fine distribution
+//             inside the chosen cell; + BSDF sampling, MIS. Slow: the limit the method approaches.
+//
+// Tables (StrategyTables) are built once per environment and strategy and shared by all threads;
+// a LightSampler (one per thread) turns them into a distribution per shading point.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "envpis/envpis.h"
+#include "render/material.h"
+#include "render/math.h"
+
+namespace envpis::render {
+
+enum class Strategy { Bsdf, Env, Mis, MisComp, Product, Oracle };
+/// "bsdf" | "env" | "mis" | "mis-comp" | "product" | "oracle"; throws Error otherwise.
+Strategy parse_strategy(const std::string& s);
+const char* to_string(Strategy s);
+const std::vector<Strategy>& all_strategies();
+
+enum class Heuristic { Power, Balance };
+Heuristic parse_heuristic(const std::string& s);  ///< "power" | "balance"
+const char* to_string(Heuristic h);
+
+struct OracleOptions {
+  int resolution = 64;  ///< top-level cells per side of the oracle's table (1..256)
+  int directions = 4;   ///< BSDF evaluations per cell: a square number (1, 4, 9, 16, ...)
+};
+
+/// What a strategy needs that is built once per environment map and shared by all threads.
+struct StrategyTables {
+  Strategy strategy = Strategy::Mis;
+  /// The table light samples come from (null for `bsdf`): the standard table for env, mis and product,
+  /// the compensated one for mis-comp, the oracle's finer table for oracle.
+  std::shared_ptr<const ImportanceTable> table;
+  OracleOptions oracle;
+  ProductSamplerOptions product;
+  double build_seconds = 0;
+
+  /// Throws Error for invalid options.
+  static StrategyTables build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle = {},
+                              const ProductSamplerOptions& product = {});
+};
+
+/// The shading point a light sampler prepares for.
+struct ShadingContext {
+  Vec3 n;         ///< world shading normal (the local frame's +Z)
+  Vec3 wo;        ///< world outgoing direction (towards the viewer), unit
+  Vec3 wo_local;  ///< the same in the local frame
+  const Frame* frame = nullptr;
+  const Material* bsdf = nullptr;
+  std::uint64_t jitter = 0;  ///< random bits for strategies that randomize their set-up (oracle)
+  /// True when the material reflects only (f = 0 below the surface): the oracle then skips the cells
+  /// whose cone lies entirely below the surface.
+  bool opaque = false;
+};
+
+/// Per-thread light sampling for one strategy. Not thread-safe; create one per thread.
+class LightSampler {
+ public:
+  explicit LightSampler(const StrategyTables& tables);
+  LightSampler(LightSampler&&) noexcept;
+  ~LightSampler();
+
+  Strategy strategy() const { return strategy_; }
+  /// Whether this strategy draws light samples at all.
+  bool has_light_samples() const { return strategy_ != Strategy::Bsdf && table_ != nullptr && !table_->empty(); }
+  /// Whether BSDF-sampled directions that reach the environment contribute (with MIS weights).
+  bool bsdf_hits_count() const { return strategy_ != Strategy::Env; }
+  /// Whether the light and BSDF estimates are combined by MIS (otherwise each has weight 1).
+  bool uses_mis() const { return strategy_ != Strategy::Bsdf && strategy_ != Strategy::Env; }
+
+  /// Builds the per-shading-point distribution (product and oracle); cheap no-op for the others.
+  void prepare(const ShadingContext& sc);
+  /// A world direction and its solid-angle density (pdf 0: no sample).
+  DirectionSample sample(Point2 u) const;
+  /// Density of sample() at world direction wi.
+  float pdf(Vec3 wi) const;
+
+  /// Product sampler (strategy product), for tests and diagnostics.
+  const ProductSampler* product_sampler() const { return product_.get(); }
+
+ private:
+  Strategy strategy_;
+  const ImportanceTable* table_ = nullptr;
+  std::unique_ptr<ProductSampler> product_;
+  // oracle
+  OracleOptions oracle_;
+  std::vector<float> su_, sv_, dx_, dy_, dz_;  // per-evaluation scratch (R^2 * k^2)
+  std::vector<float> cell_weight_, cell_cdf_;  // R^2
+  std::vector<int> active_;                     // cells evaluated at this shading point
+  float cell_total_ = 0;
+  bool oracle_valid_ = false;
+};
+
+}  // namespace envpis::render
