@@ -4,6 +4,17 @@
 // Conventions (pbrt-like): wo and wi point away from the surface; eval() returns the BSDF value f
 // (NOT multiplied by |cos theta_i|); pdf() is per unit solid angle of wi; sample() returns f, wi, pdf
 // and weight = f * |cos theta_i| / pdf. Directions are unit vectors in the local frame.
+//
+// Further conventions of the lobes in render/materials/:
+//   - Degenerate input (wo.z == 0, wi.z == 0, zero or non-finite vectors) gives eval 0, pdf 0 and no
+//     sample; nothing returns NaN or Inf.
+//   - "alpha" is the GGX roughness itself (no squaring remap). Below 1e-3 it is clamped to 1e-3: a
+//     near-mirror lobe, never a delta, so eval, pdf and sample always agree.
+//   - The reflecting lobes (Lambert, conductor, coated diffuse) are two-sided: seen from below, they
+//     reflect into the lower hemisphere. The translucent and dielectric lobes transmit across.
+//   - The dielectric's refraction term is the flux-conserving form (no 1/eta^2 radiance scaling): its
+//     albedo is <= 1 from both sides; for paths that enter and leave closed objects the factor
+//     cancels (see render/materials/dielectric.cpp).
 #pragma once
 
 #include <memory>
@@ -49,6 +60,9 @@ class Material {
   /// Fills the proxy for outgoing direction wo (local frame). The caller calls
   /// ProductSampler::prepare(normal, wo_world, proxy) with the same normal the frame uses.
   void fill_proxy(BsdfProxy& proxy, Vec3 wo) const;
+  /// Sum of weight * albedo(wo) over the lobes (the material's estimated directional albedo).
+  float albedo(Vec3 wo) const;
+  std::size_t lobe_count() const { return lobes_.size(); }
   const std::string& name() const { return name_; }
   void set_name(std::string n) { name_ = std::move(n); }
   bool empty() const { return lobes_.empty(); }

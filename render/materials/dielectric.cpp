@@ -1,0 +1,173 @@
+// Rough GGX dielectric interface with reflection and refraction (Walter, Marschner, Li, Torrance,
+// "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007).
+//
+// eta = n_inside / n_outside, the normal (+Z) points outside. Every evaluation is reduced to wo above
+// the surface: a wo below is mirrored through the origin together with wi and eta is inverted (the
+// interface seen from inside). With eta the relative IOR seen from wo (n on wi's side / n on wo's side):
+//   reflection (wi on wo's side), m = normalize(wo + wi):
+//     f = F(wo.m) D(m) G2 / (4 |cos_o| |cos_i|),          pdf = F(wo.m) D_wo(m) / (4 wo.m)
+//   refraction (wi on the other side), m = +-normalize(wo + eta wi) oriented to m_z > 0, requiring
+//   wo.m > 0 > wi.m:
+//     f = tint (1 - F(wo.m)) D(m) G2 |wo.m| |wi.m| eta^2 / (|cos_o| |cos_i| (wo.m + eta wi.m)^2)
+//     pdf = (1 - F(wo.m)) D_wo(m) eta^2 |wi.m| / (wo.m + eta wi.m)^2
+// For refraction F(wo.m) is computed from both cosines (fresnel_dielectric_pair): the same value,
+// but accurate near the critical angle and exactly reciprocal.
+// Sampling: m ~ D_wo (Heitz 2018 visible normals), reflect with probability F(wo.m) (decided by uc),
+// else refract; the sample weight f |cos_i| / pdf is then G2 / G1(wo) (times tint when refracted).
+//
+// Transport convention: the refraction term is the flux-conserving ("importance") form, i.e. it does
+// NOT carry the 1/eta^2 radiance compression of pbrt-v4's TransportMode::Radiance. Consequences:
+// the lobe's albedo (integral of f |cos_i|) is <= 1 from both sides (R + T = 1 up to the
+// single-scattering loss of the GGX model), the sample weight never exceeds 1, and the BTDF obeys
+// the generalized reciprocity f(wo, wi) / n_i^2 = f(wi, wo) / n_o^2 (n_i: index on wi's side). For
+// paths that start and end outside a closed dielectric object (the renderer's only case: the camera
+// and the environment are outside) every entry is paired with an exit and the omitted eta^2 factors
+// cancel exactly, so the images are the same as with the radiance form.
+//
+// eta == 1 (an index-matched interface) is invisible: it transmits straight through whatever its
+// roughness, a delta that a non-delta lobe cannot represent. eta within 1% of 1 is therefore moved to
+// 1 +- 0.01 and alpha to the minimum 1e-3: a very sharp but finite transmission around -wo (width
+// ~1e-5 rad, reflectance 2.5e-5) with weight ~1. Keeping the roughness would add nothing visible but
+// GGX's spurious masking loss (3.5% at alpha 0.3).
+// Total internal reflection: F = 1 for normals where refraction is impossible, so all energy reflects.
+#include "render/materials/lobe_common.h"
+
+namespace envpis::render {
+namespace {
+
+float sanitize_eta(float eta) { return std::isfinite(eta) && eta > 0 ? eta : 1.0f; }
+
+bool index_matched(float eta) { return std::abs(eta - 1.0f) < 0.01f; }
+
+class DielectricLobe final : public Lobe {
+ public:
+  DielectricLobe(float alpha, float eta, Rgb tint)
+      : alpha_(microfacet::sanitize_alpha(alpha)), eta_(sanitize_eta(eta)), tint_(lobe::sanitize_color(tint)) {
+    if (index_matched(eta_)) {
+      eta_ = eta_ >= 1.0f ? 1.01f : 0.99f;
+      alpha_ = microfacet::kMinAlpha;
+    }
+    const float e = eta_;
+    outside_ = microfacet::AlbedoTable::build(
+        alpha_, [e](float c) { return microfacet::fresnel_dielectric(c, e); }, e);
+    inside_ = microfacet::AlbedoTable::build(
+        alpha_, [e](float c) { return microfacet::fresnel_dielectric(c, 1.0f / e); }, 1.0f / e);
+  }
+
+  Rgb eval(Vec3 wo, Vec3 wi) const override {
+    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
+    if (wo.z > 0) return eval_up(wo, wi, eta_);
+    return eval_up(-wo, -wi, 1.0f / eta_);
+  }
+
+  float pdf(Vec3 wo, Vec3 wi) const override {
+    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return 0.0f;
+    if (wo.z > 0) return pdf_up(wo, wi, eta_);
+    return pdf_up(-wo, -wi, 1.0f / eta_);
+  }
+
+  std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const override {
+    if (!microfacet::usable(wo)) return std::nullopt;
+    const float s = wo.z > 0 ? 1.0f : -1.0f;
+    const float eta = wo.z > 0 ? eta_ : 1.0f / eta_;
+    const Vec3 wo_up = wo * s;
+    const Vec3 m = microfacet::ggx_sample_visible_normal(wo_up, alpha_, u);
+    const float c = dot(wo_up, m);
+    if (!(c > 0)) return std::nullopt;
+    const float f = microfacet::fresnel_dielectric(c, eta);
+    Vec3 wi;
+    if (uc < f) {
+      wi = microfacet::reflect(wo_up, m);
+      if (!(wi.z > 0)) return std::nullopt;  // shadowed: the pdf has no mass here
+    } else {
+      if (!microfacet::refract(wo_up, m, eta, wi) || !(wi.z < 0)) return std::nullopt;
+    }
+    const Rgb value = eval_up(wo_up, wi, eta);
+    const float p = pdf_up(wo_up, wi, eta);
+    return lobe::make_sample(wo, wi * s, value, p);
+  }
+
+  float albedo(Vec3 wo) const override {
+    if (!microfacet::usable(wo)) return 0.0f;
+    const microfacet::AlbedoTable& t = wo.z > 0 ? outside_ : inside_;
+    return t.reflection(wo.z) + t.transmission(wo.z) * tint_.average();
+  }
+
+  /// Reflection and refraction lobes with their single-scattering energies as weights; the proxy
+  /// itself inverts eta when wo is below the surface.
+  void add_to_proxy(BsdfProxy& proxy, Vec3 wo, float weight) const override {
+    if (!microfacet::usable(wo)) return;
+    const microfacet::AlbedoTable& t = wo.z > 0 ? outside_ : inside_;
+    proxy.add_reflection(weight * t.reflection(wo.z), alpha_);
+    proxy.add_refraction(weight * t.transmission(wo.z) * tint_.average(), alpha_, eta_);
+  }
+
+  std::string name() const override { return "dielectric"; }
+
+  float eta() const { return eta_; }
+
+ private:
+  /// Generalized half vector of a refraction pair (wo above, wi below), oriented up, and its cosines.
+  bool refraction_half_vector(Vec3 wo, Vec3 wi, float eta, Vec3& m, float& co, float& ci) const {
+    Vec3 h = wo + wi * eta;
+    const float l2 = dot(h, h);
+    if (!(l2 > 1e-24f)) return false;
+    h = h * (1.0f / std::sqrt(l2));
+    if (h.z < 0) h = -h;
+    co = dot(wo, h);
+    ci = dot(wi, h);
+    if (!(co > 0) || !(ci < 0)) return false;  // back-facing microfacet: no such path
+    m = h;
+    return true;
+  }
+
+  /// f for wo above the surface; eta = n_below / n_above.
+  Rgb eval_up(Vec3 wo, Vec3 wi, float eta) const {
+    if (wi.z > 0) {
+      float cos_h;
+      const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
+      if (!(g > 0)) return {};
+      const float v = microfacet::fresnel_dielectric(cos_h, eta) * g;
+      return {v, v, v};
+    }
+    Vec3 m;
+    float co, ci;
+    if (!refraction_half_vector(wo, wi, eta, m, co, ci)) return {};
+    const float f = microfacet::fresnel_dielectric_pair(co, -ci, eta);
+    if (!(f < 1.0f)) return {};
+    const float denom = co + eta * ci;
+    const float v = (1.0f - f) * microfacet::ggx_d(m, alpha_) * microfacet::ggx_g2(wo, wi, alpha_) * co * (-ci) *
+                    eta * eta / (wo.z * (-wi.z) * denom * denom);
+    return std::isfinite(v) ? tint_ * v : Rgb{};
+  }
+
+  /// pdf for wo above the surface; eta = n_below / n_above.
+  float pdf_up(Vec3 wo, Vec3 wi, float eta) const {
+    if (wi.z > 0) {
+      Vec3 m;
+      if (!microfacet::reflection_half_vector(wo, wi, m)) return 0.0f;
+      return microfacet::fresnel_dielectric(dot(wo, m), eta) * microfacet::ggx_reflection_pdf(wo, wi, alpha_);
+    }
+    Vec3 m;
+    float co, ci;
+    if (!refraction_half_vector(wo, wi, eta, m, co, ci)) return 0.0f;
+    const float f = microfacet::fresnel_dielectric_pair(co, -ci, eta);
+    if (!(f < 1.0f)) return 0.0f;
+    const float denom = co + eta * ci;
+    const float p = (1.0f - f) * microfacet::ggx_visible_normal_pdf(wo, m, alpha_) * eta * eta * (-ci) /
+                    (denom * denom);
+    return std::isfinite(p) ? p : 0.0f;
+  }
+
+  float alpha_, eta_;
+  Rgb tint_;
+  microfacet::AlbedoTable outside_, inside_;
+};
+
+}  // namespace
+
+std::shared_ptr<const Lobe> make_dielectric(float alpha, float eta, Rgb tint) {
+  return std::make_shared<DielectricLobe>(alpha, eta, tint);
+}
+
+}  // namespace envpis::render

@@ -1,0 +1,121 @@
+// Material: a weighted sum of lobes.
+//   eval(wo, wi) = sum_k w_k f_k(wo, wi)
+//   sample: lobe k is chosen with probability P_k = w_k albedo_k(wo) / sum_j w_j albedo_j(wo) (using uc,
+//           which is then rescaled and handed to the lobe), the lobe samples wi, and the sample
+//           reports the whole material's f and the mixture pdf sum_k P_k pdf_k(wo, wi), i.e. one-sample
+//           MIS over the lobes with the balance heuristic. pdf(wo, wi) returns the same mixture.
+// Lobes with zero albedo for wo are never chosen; if every lobe has zero albedo the material is
+// black for wo and sample() returns nullopt.
+#include <array>
+
+#include "render/materials/lobe_common.h"
+
+namespace envpis::render {
+
+namespace {
+
+/// Selection weights w_k albedo_k(wo), on the stack for the usual few lobes.
+class Selection {
+ public:
+  template <class Entries>
+  Selection(const Entries& lobes, Vec3 wo) : n_(lobes.size()) {
+    if (n_ > kInline) heap_.resize(n_);
+    float* p = data();
+    for (std::size_t k = 0; k < n_; ++k) {
+      const float a = lobes[k].weight * lobes[k].lobe->albedo(wo);
+      p[k] = std::isfinite(a) && a > 0 ? a : 0.0f;
+      total_ += p[k];
+    }
+  }
+  float total() const { return total_; }
+  /// Probability of lobe k.
+  float probability(std::size_t k) const { return data()[k] / total_; }
+  /// Chooses a lobe with uc and rescales uc to [0, 1) within the choice.
+  std::size_t choose(float& uc) const {
+    const float* p = data();
+    float target = uc * total_, acc = 0;
+    std::size_t last = 0;
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (p[k] <= 0) continue;
+      last = k;
+      if (target < acc + p[k]) {
+        uc = std::min((target - acc) / p[k], 0x1.fffffep-1f);
+        return k;
+      }
+      acc += p[k];
+    }
+    uc = std::min(std::max(uc, 0.0f), 0x1.fffffep-1f);  // rounding at the top end: the last positive lobe
+    return last;
+  }
+
+ private:
+  static constexpr std::size_t kInline = 8;
+  const float* data() const { return n_ > kInline ? heap_.data() : inline_.data(); }
+  float* data() { return n_ > kInline ? heap_.data() : inline_.data(); }
+  std::size_t n_;
+  float total_ = 0;
+  std::array<float, kInline> inline_{};
+  std::vector<float> heap_;
+};
+
+}  // namespace
+
+void Material::add(std::shared_ptr<const Lobe> lobe, float weight) {
+  if (!lobe || !std::isfinite(weight) || !(weight > 0)) return;  // contributes nothing
+  lobes_.push_back({std::move(lobe), weight});
+}
+
+Rgb Material::eval(Vec3 wo, Vec3 wi) const {
+  Rgb f;
+  for (const Entry& e : lobes_) f = f + e.lobe->eval(wo, wi) * e.weight;
+  return f;
+}
+
+float Material::pdf(Vec3 wo, Vec3 wi) const {
+  if (lobes_.empty() || !microfacet::usable(wo) || !microfacet::usable(wi)) return 0.0f;
+  const Selection sel(lobes_, wo);
+  if (!(sel.total() > 0)) return 0.0f;
+  float p = 0;
+  for (std::size_t k = 0; k < lobes_.size(); ++k) {
+    const float pk = sel.probability(k);
+    if (pk > 0) p += pk * lobes_[k].lobe->pdf(wo, wi);
+  }
+  return p;
+}
+
+std::optional<BsdfSample> Material::sample(Vec3 wo, Point2 u, float uc) const {
+  if (lobes_.empty() || !microfacet::usable(wo)) return std::nullopt;
+  const Selection sel(lobes_, wo);
+  if (!(sel.total() > 0)) return std::nullopt;
+  const std::size_t k = sel.choose(uc);
+  const auto s = lobes_[k].lobe->sample(wo, u, uc);
+  if (!s) return std::nullopt;
+  if (lobes_.size() == 1) {
+    BsdfSample r = *s;  // the lobe's own pdf is the mixture's
+    r.f = r.f * lobes_[0].weight;
+    r.weight = r.weight * lobes_[0].weight;
+    return r;
+  }
+  Rgb f;
+  float p = 0;
+  for (std::size_t j = 0; j < lobes_.size(); ++j) {
+    f = f + lobes_[j].lobe->eval(wo, s->wi) * lobes_[j].weight;
+    const float pj = sel.probability(j);
+    if (pj > 0) p += pj * (j == k ? s->pdf : lobes_[j].lobe->pdf(wo, s->wi));
+  }
+  return lobe::make_sample(wo, s->wi, f, p);
+}
+
+float Material::albedo(Vec3 wo) const {
+  if (!microfacet::usable(wo)) return 0.0f;
+  float a = 0;
+  for (const Entry& e : lobes_) a += e.weight * e.lobe->albedo(wo);
+  return a;
+}
+
+void Material::fill_proxy(BsdfProxy& proxy, Vec3 wo) const {
+  if (!microfacet::usable(wo)) return;
+  for (const Entry& e : lobes_) e.lobe->add_to_proxy(proxy, wo, e.weight);
+}
+
+}  // namespace envpis::render
