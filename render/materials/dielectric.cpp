@@ -5,15 +5,18 @@
 // the surface: a wo below is mirrored through the origin together with wi and eta is inverted (the
 // interface seen from inside). With eta the relative IOR seen from wo (n on wi's side / n on wo's side):
 //   reflection (wi on wo's side), m = normalize(wo + wi):
-//     f = F(wo.m) D(m) G2 / (4 |cos_o| |cos_i|),          pdf = F(wo.m) D_wo(m) / (4 wo.m)
+//     f = F(wo.m) D(m) G2 / (4 |cos_o| |cos_i|)
 //   refraction (wi on the other side), m = +-normalize(wo + eta wi) oriented to m_z > 0, requiring
 //   wo.m > 0 > wi.m:
 //     f = tint (1 - F(wo.m)) D(m) G2 |wo.m| |wi.m| eta^2 / (|cos_o| |cos_i| (wo.m + eta wi.m)^2)
-//     pdf = (1 - F(wo.m)) D_wo(m) eta^2 |wi.m| / (wo.m + eta wi.m)^2
+//     pdf = (1 - P_r) D_wo(m) eta^2 |wi.m| / (wo.m + eta wi.m)^2
+// where P_r = F / (F + (1 - F) avg(tint)) is the probability of reflecting off the sampled normal
+// (P_r = F for clear glass; a dark tint sends fewer samples into the absorbed transmission), and the
+// reflection pdf is P_r D_wo(m) / (4 wo.m).
 // For refraction F(wo.m) is computed from both cosines (fresnel_dielectric_pair): the same value,
 // but accurate near the critical angle and exactly reciprocal.
-// Sampling: m ~ D_wo (Heitz 2018 visible normals), reflect with probability F(wo.m) (decided by uc),
-// else refract; the sample weight f |cos_i| / pdf is then G2 / G1(wo) (times tint when refracted).
+// Sampling: m ~ D_wo (Heitz 2018 visible normals), reflect with probability P_r (decided by uc), else
+// refract; for clear glass the sample weight f |cos_i| / pdf is then G2 / G1(wo).
 //
 // Transport convention: the refraction term is the flux-conserving ("importance") form, i.e. it does
 // NOT carry the 1/eta^2 radiance compression of pbrt-v4's TransportMode::Radiance. Consequences:
@@ -76,7 +79,7 @@ class DielectricLobe final : public Lobe {
     if (!(c > 0)) return std::nullopt;
     const float f = microfacet::fresnel_dielectric(c, eta);
     Vec3 wi;
-    if (uc < f) {
+    if (uc < reflect_probability(f)) {
       wi = microfacet::reflect(wo_up, m);
       if (!(wi.z > 0)) return std::nullopt;  // shadowed: the pdf has no mass here
     } else {
@@ -121,6 +124,12 @@ class DielectricLobe final : public Lobe {
     return true;
   }
 
+  /// Probability of reflecting off a microfacet of Fresnel reflectance f.
+  float reflect_probability(float f) const {
+    const float d = f + (1.0f - f) * tint_.average();
+    return d > 0 ? f / d : 1.0f;
+  }
+
   /// f for wo above the surface; eta = n_below / n_above.
   Rgb eval_up(Vec3 wo, Vec3 wi, float eta) const {
     if (wi.z > 0) {
@@ -146,7 +155,8 @@ class DielectricLobe final : public Lobe {
     if (wi.z > 0) {
       Vec3 m;
       if (!microfacet::reflection_half_vector(wo, wi, m)) return 0.0f;
-      return microfacet::fresnel_dielectric(dot(wo, m), eta) * microfacet::ggx_reflection_pdf(wo, wi, alpha_);
+      return reflect_probability(microfacet::fresnel_dielectric(dot(wo, m), eta)) *
+             microfacet::ggx_reflection_pdf(wo, wi, alpha_);
     }
     Vec3 m;
     float co, ci;
@@ -154,8 +164,8 @@ class DielectricLobe final : public Lobe {
     const float f = microfacet::fresnel_dielectric_pair(co, -ci, eta);
     if (!(f < 1.0f)) return 0.0f;
     const float denom = co + eta * ci;
-    const float p = (1.0f - f) * microfacet::ggx_visible_normal_pdf(wo, m, alpha_) * eta * eta * (-ci) /
-                    (denom * denom);
+    const float p = (1.0f - reflect_probability(f)) * microfacet::ggx_visible_normal_pdf(wo, m, alpha_) * eta *
+                    eta * (-ci) / (denom * denom);
     return std::isfinite(p) ? p : 0.0f;
   }
 

@@ -182,6 +182,9 @@ const std::vector<Chi2Case>& dielectric_cases() {
     c.push_back(lobe_case("dielectric eta=1.33 tinted a=0.3", make_dielectric(0.3f, 1.33f, {0.9f, 0.7f, 0.5f}),
                           dir(0.5f), 0.3f));
     c.push_back(lobe_case("dielectric eta=0.8 a=0.3", make_dielectric(0.3f, 0.8f), dir(0.6f), 0.3f));
+    // a dark tint shifts the reflect/refract choice toward reflection
+    const auto dark = make_dielectric(0.1f, 1.5f, {0.1f, 0.2f, 0.05f});
+    for (float z : {0.7f, -0.9f}) c.push_back(lobe_case("dielectric dark tint a=0.1", dark, dir(z), 0.1f));
     return c;
   }();
   return v;
