@@ -21,7 +21,7 @@
 // Transport convention: the refraction term is the flux-conserving ("importance") form, i.e. it does
 // NOT carry the 1/eta^2 radiance compression of pbrt-v4's TransportMode::Radiance. Consequences:
 // the lobe's albedo (integral of f |cos_i|) is <= 1 from both sides (R + T = 1 up to the
-// single-scattering loss of the GGX model), the sample weight never exceeds 1, and the BTDF obeys
+// single-scattering loss of the GGX model), a clear glass's sample weight never exceeds 1, and the BTDF obeys
 // the generalized reciprocity f(wo, wi) / n_i^2 = f(wi, wo) / n_o^2 (n_i: index on wi's side). For
 // paths that start and end outside a closed dielectric object (the renderer's only case: the camera
 // and the environment are outside) every entry is paired with an exit and the omitted eta^2 factors
@@ -29,8 +29,9 @@
 //
 // eta == 1 (an index-matched interface) is invisible: it transmits straight through whatever its
 // roughness, a delta that a non-delta lobe cannot represent. eta within 1% of 1 is therefore moved to
-// 1 +- 0.01 and alpha to the minimum 1e-3: a very sharp but finite transmission around -wo (width
-// ~1e-5 rad, reflectance 2.5e-5) with weight ~1. Keeping the roughness would add nothing visible but
+// 1 +- 0.01 and alpha to the minimum 1e-3: a very sharp but finite transmission (width ~1e-5 rad,
+// reflectance 2.5e-5, weight ~1) around the macro-surface refraction, which is within
+// 0.01 tan(theta_o) of -wo. Keeping the roughness would add nothing visible but
 // GGX's spurious masking loss (3.5% at alpha 0.3).
 // Total internal reflection: F = 1 for normals where refraction is impossible, so all energy reflects.
 #include "render/materials/lobe_common.h"

@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <complex>
 #include <limits>
 
 #include "envpis/common.h"
@@ -156,18 +155,23 @@ inline float fresnel_dielectric_pair(float cos_i, float cos_t, float eta) {
   return std::isfinite(f) ? std::clamp(f, 0.0f, 1.0f) : 1.0f;
 }
 
-/// Exact Fresnel reflectance of a conductor with complex relative IOR eta + i k (unpolarized),
-/// for 0 <= cos_i <= 1.
+/// Exact Fresnel reflectance of a conductor with complex relative IOR eta + i k (unpolarized), for
+/// 0 <= cos_i <= 1. Real-arithmetic form of the complex Fresnel equations: with
+/// a^2 + b^2 = sqrt((eta^2 - k^2 - sin^2)^2 + 4 eta^2 k^2) and a^2 = (a^2 + b^2 + eta^2 - k^2 - sin^2) / 2,
+///   R_s = (a^2 + b^2 - 2 a cos + cos^2) / (a^2 + b^2 + 2 a cos + cos^2)
+///   R_p = R_s (cos^2 (a^2 + b^2) - 2 a cos sin^2 + sin^4) / (cos^2 (a^2 + b^2) + 2 a cos sin^2 + sin^4)
+/// (tests/render/test_materials.cpp checks it against std::complex arithmetic).
 inline float fresnel_conductor(float cos_i, float eta, float k) {
-  using C = std::complex<float>;
   cos_i = std::clamp(cos_i, 0.0f, 1.0f);
-  const C n(eta, k);
-  if (std::norm(n) < 1e-12f) return 1.0f;  // degenerate IOR: a perfect mirror
-  const C sin2_t = C(1.0f - cos_i * cos_i) / (n * n);
-  const C cos_t = std::sqrt(C(1.0f) - sin2_t);
-  const C r_par = (n * cos_i - cos_t) / (n * cos_i + cos_t);
-  const C r_perp = (C(cos_i) - n * cos_t) / (C(cos_i) + n * cos_t);
-  const float f = 0.5f * (std::norm(r_par) + std::norm(r_perp));
+  if (cos_i == 0.0f) return 1.0f;  // grazing: a perfect mirror whatever the IOR
+  const float c2 = cos_i * cos_i, s2 = 1.0f - c2;
+  const float t0 = eta * eta - k * k - s2;
+  const float ab2 = std::sqrt(t0 * t0 + 4.0f * eta * eta * k * k);
+  const float a = std::sqrt(std::max(0.0f, 0.5f * (ab2 + t0)));
+  const float rs = (ab2 - 2.0f * a * cos_i + c2) / (ab2 + 2.0f * a * cos_i + c2);
+  const float p_num = c2 * ab2 - 2.0f * a * cos_i * s2 + s2 * s2;
+  const float p_den = c2 * ab2 + 2.0f * a * cos_i * s2 + s2 * s2;
+  const float f = p_den > 0 ? 0.5f * (rs + rs * p_num / p_den) : rs;
   return std::isfinite(f) ? std::clamp(f, 0.0f, 1.0f) : 1.0f;
 }
 

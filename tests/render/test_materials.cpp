@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -89,6 +90,16 @@ TEST(MaterialMicrofacet, FresnelKnownValues) {
   const float n = 0.143f, k = 3.983f;
   EXPECT_NEAR(mf::fresnel_conductor(1.0f, n, k), ((n - 1) * (n - 1) + k * k) / ((n + 1) * (n + 1) + k * k), 1e-5f);
   EXPECT_NEAR(mf::fresnel_conductor(0.0f, n, k), 1.0f, 1e-5f);
+  // Against the complex-arithmetic Fresnel equations (double precision).
+  auto complex_fresnel = [](double c, double eta, double kk) {
+    using C = std::complex<double>;
+    const C n(eta, kk), ct = std::sqrt(C(1.0) - C(1.0 - c * c) / (n * n));
+    const C rp = (n * c - ct) / (n * c + ct), rs = (C(c) - n * ct) / (C(c) + n * ct);
+    return 0.5 * (std::norm(rp) + std::norm(rs));
+  };
+  for (auto [e, kk] : {std::pair{0.143f, 3.983f}, {1.442f, 1.603f}, {2.9f, 3.0f}, {1.5f, 0.0f}, {0.2f, 0.0f}})
+    for (float c : {1.0f, 0.9f, 0.6f, 0.3f, 0.1f, 0.01f})
+      EXPECT_NEAR(mf::fresnel_conductor(c, e, kk), complex_fresnel(c, e, kk), 2e-5) << e << " " << kk << " " << c;
   EXPECT_NEAR(mf::fresnel_schlick(1.0f, 0.3f), 0.3f, 1e-7f);
   EXPECT_NEAR(mf::fresnel_schlick(0.0f, 0.3f), 1.0f, 1e-7f);
   // The two-cosine form agrees with the one-cosine form on Snell pairs and is symmetric in the sides.
