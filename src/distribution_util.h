@@ -19,10 +19,10 @@ struct Flat2DSample {
 };
 
 /// `cdf` has w * h entries: cdf[y * w + x] = sum of the masses of cells before and including (x, y)
-/// in row-major order, divided by the total (so cdf[w*h-1] == 1). Chooses a row with u.y (from the
-/// row ends), then a column inside it with u.x: the sample keeps the 2D stratification of u.
-inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u) {
-  const float uy = clamp_unit(u.y), ux = clamp_unit(u.x);
+/// in row-major order; `total` is the last entry (1 for a normalized table). Chooses a row with u.y
+/// (from the row ends), then a column inside it with u.x: the sample keeps the 2D stratification of u.
+inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u, float total = 1.0f) {
+  const float uy = clamp_unit(u.y) * total, ux = clamp_unit(u.x);
   // Row: first r whose row end exceeds uy.
   int lo = 0, hi = h - 1;
   while (lo < hi) {
@@ -35,7 +35,7 @@ inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u) {
   const float row_start = s.y > 0 ? cdf[s.y * w - 1] : 0.0f;
   const float row_end = cdf[s.y * w + w - 1];
   const float row_mass = row_end - row_start;
-  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;  // row_start <= uy < row_end
   // Column: first x in the row whose running sum exceeds the target.
   const float target = row_start + ux * row_mass;
   const float* row = cdf + s.y * w;

@@ -13,7 +13,7 @@ namespace envpis::detail::ENVPIS_KERNEL_NS {
 using namespace simd;
 
 template <class V>
-inline void square_to_sphere_one(V px, V py, V& x, V& y, V& z) {
+ENVPIS_INLINE void square_to_sphere_one(V px, V py, V& x, V& y, V& z) {
   px = vmin(vmax(px, V(0.0f)), V(1.0f));
   py = vmin(vmax(py, V(0.0f)), V(1.0f));
   const V u = V(2.0f) * px - V(1.0f);
@@ -32,7 +32,7 @@ inline void square_to_sphere_one(V px, V py, V& x, V& y, V& z) {
 }
 
 template <class V>
-inline void sphere_to_square_one(V dx, V dy, V dz, V& pu, V& pv) {
+ENVPIS_INLINE void sphere_to_square_one(V dx, V dy, V dz, V& pu, V& pv) {
   const V inv_len = V(1.0f) / vsqrt(dx * dx + dy * dy + dz * dz);
   dx = dx * inv_len;
   dy = dy * inv_len;
@@ -58,7 +58,7 @@ inline void sphere_to_square_one(V dx, V dy, V dz, V& pu, V& pv) {
 /// cos of the angle between `axis` and the direction of the cone (axis a, half-angle b) closest to it:
 /// max(0, t - b) where cos t = c.
 template <class V>
-inline V closest_cos(V c, V cosb, V sinb) {
+ENVPIS_INLINE V closest_cos(V c, V cosb, V sinb) {
   const V s = vsqrt(vmax(V(1.0f) - c * c, V(0.0f)));
   return select(c >= cosb, V(1.0f), c * cosb + s * sinb);
 }
@@ -68,7 +68,7 @@ inline V closest_cos(V c, V cosb, V sinb) {
 /// direction on the lobe's side of the surface keeps a small positive weight (true GGX lobes reach the
 /// whole hemisphere through the half-vector, e.g. back-scattering at grazing views).
 template <class V>
-inline V ggx_like(V c, V coef, V m) {
+ENVPIS_INLINE V ggx_like(V c, V coef, V m) {
   const V cp = vmax(c, V(0.0f));
   const V d = V(1.0f) + m * cp * cp;
   return coef / (d * d);
@@ -84,29 +84,40 @@ struct LobeV {
 };
 
 /// The proxy's value for a cone (axis a, half-angle b): every lobe evaluated at the cone's direction
-/// closest to its axis.
-template <class V>
-inline V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
+/// closest to its axis. kTransmission = false skips the lobes below the surface (translucent and
+/// refraction), for the common opaque case; it must only be used when both their weights are 0.
+template <class V, bool kTransmission = true>
+ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
-  const V up = closest_cos(cn, cb, sb);     // towards N
-  const V down = closest_cos(-cn, cb, sb);  // towards -N
+  // N and -N make supplementary angles with the axis: one sine serves both.
+  const V sn = vsqrt(vmax(V(1.0f) - cn * cn, V(0.0f)));
+  const V up = select(cn >= cb, V(1.0f), cn * cb + sn * sb);     // towards N
   const V cR = closest_cos(l.rx * ax + l.ry * ay + l.rz * az, cb, sb);
-  const V cT = closest_cos(l.tx * ax + l.ty * ay + l.tz * az, cb, sb);
-  const V above = select(up > V(0.0f), V(1.0f), V(0.0f));
-  const V below = select(down > V(0.0f), V(1.0f), V(0.0f));
-  return above * (l.kd * up + ggx_like(cR, l.cr, l.mr)) + below * (l.kt * down + ggx_like(cT, l.ct, l.mt));
+  V value = select(up > V(0.0f), l.kd * up + ggx_like(cR, l.cr, l.mr), V(0.0f));
+  if constexpr (kTransmission) {
+    const V down = select(-cn >= cb, V(1.0f), sn * sb - cn * cb);  // towards -N
+    const V cT = closest_cos(l.tx * ax + l.ty * ay + l.tz * az, cb, sb);
+    value = value + select(down > V(0.0f), l.kt * down + ggx_like(cT, l.ct, l.mt), V(0.0f));
+  }
+  return value;
+}
+
+template <class V, bool kTransmission>
+ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
+  constexpr std::size_t W = lanes<V>();
+  const LobeV<V> l(p);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
+    const V value = proxy_cone_value<V, kTransmission>(l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i),
+                                                       load_any<V>(cells.az + i), load_any<V>(cells.cosb + i),
+                                                       load_any<V>(cells.sinb + i));
+    store(value * load_any<V>(cells.prob + i), out + i);
+  }
 }
 
 template <class V>
 __attribute__((flatten)) void product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
-  constexpr std::size_t W = lanes<V>();
-  const LobeV<V> l(p);
-  for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
-    const V value = proxy_cone_value(l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i),
-                                     load_any<V>(cells.az + i), load_any<V>(cells.cosb + i),
-                                     load_any<V>(cells.sinb + i));
-    store(value * load_any<V>(cells.prob + i), out + i);
-  }
+  if (p.kt > 0.0f || p.ct > 0.0f) product_weights_impl<V, true>(cells, p, out);
+  else product_weights_impl<V, false>(cells, p, out);
 }
 
 template <class V>

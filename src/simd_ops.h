@@ -8,19 +8,23 @@
 #include <cstddef>
 #include <experimental/simd>
 
+#ifndef ENVPIS_INLINE
+#define ENVPIS_INLINE inline __attribute__((always_inline))
+#endif
+
 namespace envpis::detail::ENVPIS_KERNEL_NS::simd {
 
 namespace stdx = std::experimental;
 
 // ---- scalar ----
-inline float select(bool m, float a, float b) { return m ? a : b; }
-inline float load(const float* p) { return *p; }
-inline void store(float v, float* p) { *p = v; }
-inline float vsqrt(float a) { return std::sqrt(a); }
-inline float vabs(float a) { return std::fabs(a); }
-inline float vmin(float a, float b) { return std::min(a, b); }
-inline float vmax(float a, float b) { return std::max(a, b); }
-inline float vcopysign(float mag, float sgn) { return std::copysign(mag, sgn); }
+ENVPIS_INLINE float select(bool m, float a, float b) { return m ? a : b; }
+ENVPIS_INLINE float load(const float* p) { return *p; }
+ENVPIS_INLINE void store(float v, float* p) { *p = v; }
+ENVPIS_INLINE float vsqrt(float a) { return std::sqrt(a); }
+ENVPIS_INLINE float vabs(float a) { return std::fabs(a); }
+ENVPIS_INLINE float vmin(float a, float b) { return std::min(a, b); }
+ENVPIS_INLINE float vmax(float a, float b) { return std::max(a, b); }
+ENVPIS_INLINE float vcopysign(float mag, float sgn) { return std::copysign(mag, sgn); }
 template <class V>
 constexpr std::size_t lanes() {
   if constexpr (std::is_same_v<V, float>) return 1;
@@ -31,37 +35,37 @@ constexpr std::size_t lanes() {
 template <class A>
 using VF = stdx::simd<float, A>;
 template <class A>
-VF<A> select(typename VF<A>::mask_type m, VF<A> a, VF<A> b) {
+ENVPIS_INLINE VF<A> select(typename VF<A>::mask_type m, VF<A> a, VF<A> b) {
   VF<A> r = b;
   stdx::where(m, r) = a;
   return r;
 }
 template <class V>
-V load_v(const float* p) {
+ENVPIS_INLINE V load_v(const float* p) {
   return V(p, stdx::element_aligned);
 }
 template <class A>
-void store(VF<A> v, float* p) { v.copy_to(p, stdx::element_aligned); }
+ENVPIS_INLINE void store(VF<A> v, float* p) { v.copy_to(p, stdx::element_aligned); }
 template <class A>
-VF<A> vsqrt(VF<A> a) { return stdx::sqrt(a); }
+ENVPIS_INLINE VF<A> vsqrt(VF<A> a) { return stdx::sqrt(a); }
 template <class A>
-VF<A> vabs(VF<A> a) { return stdx::abs(a); }
+ENVPIS_INLINE VF<A> vabs(VF<A> a) { return stdx::abs(a); }
 template <class A>
-VF<A> vmin(VF<A> a, VF<A> b) { return stdx::min(a, b); }
+ENVPIS_INLINE VF<A> vmin(VF<A> a, VF<A> b) { return stdx::min(a, b); }
 template <class A>
-VF<A> vmax(VF<A> a, VF<A> b) { return stdx::max(a, b); }
+ENVPIS_INLINE VF<A> vmax(VF<A> a, VF<A> b) { return stdx::max(a, b); }
 template <class A>
-VF<A> vcopysign(VF<A> mag, VF<A> sgn) { return stdx::copysign(mag, sgn); }
+ENVPIS_INLINE VF<A> vcopysign(VF<A> mag, VF<A> sgn) { return stdx::copysign(mag, sgn); }
 
 template <class V>
-V load_any(const float* p) {
+ENVPIS_INLINE V load_any(const float* p) {
   if constexpr (std::is_same_v<V, float>) return *p;
   else return load_v<V>(p);
 }
 
 /// atan(x) for x in [0, 1], about 1 ulp (Cephes-style range reduction + odd polynomial).
 template <class V>
-V atan_unit(V x) {
+ENVPIS_INLINE V atan_unit(V x) {
   const auto big = x > V(0.41421356237f);  // tan(pi/8)
   const V t = select(big, (x - V(1.0f)) / (x + V(1.0f)), x);
   const V z = t * t;
@@ -74,7 +78,7 @@ V atan_unit(V x) {
 
 /// sin and cos of phi in [0, pi/2] (polynomials, ~1e-7 absolute).
 template <class V>
-void sincos_quadrant(V phi, V& s, V& c) {
+ENVPIS_INLINE void sincos_quadrant(V phi, V& s, V& c) {
   // Reduce to [0, pi/4] by symmetry about pi/4.
   const auto hi = phi > V(0.78539816339744830962f);
   const V x = select(hi, V(1.57079632679489661923f) - phi, phi);

@@ -53,7 +53,7 @@ class ProductSampler {
   float pdf(Vec3 wi) const;
 
   /// Normalized top-level probability of cell c for the current shading point.
-  float cell_probability(int c) const { return prob_[c]; }
+  float cell_probability(int c) const { return prob_[c] * inv_total_; }
   const PreparedProxy& prepared_proxy() const { return prepared_; }
   const ImportanceTable& table() const { return *table_; }
   const ProductSamplerOptions& options() const { return options_; }
@@ -63,8 +63,9 @@ class ProductSampler {
   ProductSamplerOptions options_;
   const void* kernels_;  // detail::Kernels
   PreparedProxy prepared_;
-  std::vector<float> prob_;  // padded T^2: normalized product probabilities
-  std::vector<float> cdf_;   // T^2 running sums
+  std::vector<float> prob_;  // padded T^2: product weights (unnormalized)
+  std::vector<float> cdf_;   // T^2 running sums of prob_ (row-major)
+  float total_ = 0, inv_total_ = 0;
   bool valid_ = false;
   bool fallback_ = false;
 };
