@@ -70,6 +70,16 @@ struct RenderResult {
 /// Throws Error for invalid options (spp, size, threads, depth) or an uncommitted scene.
 RenderResult render(const Scene& scene, const RenderOptions& options);
 
+/// Convenience form for tools that compare strategies: `base` supplies everything else.
+inline RenderResult render(const Scene& scene, Strategy strategy, int spp, std::uint64_t seed,
+                           RenderOptions base = {}) {
+  base.strategy = strategy;
+  base.spp = spp;
+  base.seed = seed;
+  if (base.tables && base.tables->strategy != strategy) base.tables = nullptr;
+  return render(scene, base);
+}
+
 /// Checks what render() would reject, without rendering (for early command-line validation).
 void validate(const RenderOptions& options);
 

@@ -196,14 +196,14 @@ Scene build_fig5(std::shared_ptr<const EnvironmentMap> env, std::string env_desc
   s.add_material("gold", single(make_conductor(0.25f, {0.143f, 0.374f, 1.442f}, {3.983f, 2.386f, 1.603f})), false);
   s.add_material("ground", single(make_lambert({0.12f, 0.12f, 0.12f})), false);
   TriangleMesh knot = make_torus_knot(2, 3, 2.0f, 0.9f, 0.42f, 600, 32);
-  for (Vec3& p : knot.positions) p = p + Vec3{0, 0, 1.45f};
+  for (Vec3& p : knot.positions) p = p + Vec3{0, 0, 1.36f};  // lowest point 0.04 above the ground
   s.add_mesh("knot", std::move(knot), 0);
   s.add_mesh("ground", make_quad({0, 0, 0}, 12.0f, 12.0f), 1);
   CameraSpec cam;
-  cam.from = {0.0f, -10.5f, 5.0f};
+  cam.from = {0.0f, -9.0f, 4.6f};
   cam.to = {0.0f, 0.0f, 1.2f};
   cam.up = {0, 0, 1};
-  cam.vfov_degrees = 38.0f;
+  cam.vfov_degrees = 34.0f;
   cam.width = 640;
   cam.height = 360;
   s.set_camera(cam);

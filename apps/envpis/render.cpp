@@ -42,6 +42,9 @@ struct RenderArgs {
   std::string max_depth = "8";
   std::string oracle_res = "64";
   std::string oracle_dirs = "4";
+  std::string proxy_transform;  // empty: the library's defaults (ProductSamplerOptions)
+  std::string proxy_min_alpha;
+  std::string env_mix;
   std::string out;
   std::string id_out;
   bool quiet = false;
@@ -116,6 +119,16 @@ void run(const RenderArgs& a) {
   o.max_depth = static_cast<int>(parse_int("--max-depth", a.max_depth, 1, 1024));
   o.oracle.resolution = static_cast<int>(parse_int("--oracle-res", a.oracle_res, 1, 256));
   o.oracle.directions = static_cast<int>(parse_int("--oracle-dirs", a.oracle_dirs, 1, 256));
+  if (!a.proxy_transform.empty()) o.product.proxy.transform = parse_roughness_transform(a.proxy_transform);
+  if (!a.proxy_min_alpha.empty()) {
+    o.product.proxy.min_alpha = parse_float("--proxy-min-alpha", a.proxy_min_alpha);
+    if (!(o.product.proxy.min_alpha >= 0 && o.product.proxy.min_alpha <= 1))
+      throw Error("--proxy-min-alpha must be in [0, 1]");
+  }
+  if (!a.env_mix.empty()) {
+    o.product.env_mix = parse_float("--env-mix", a.env_mix);
+    if (!(o.product.env_mix >= 0 && o.product.env_mix <= 1)) throw Error("--env-mix must be in [0, 1]");
+  }
   const float rotation = parse_float("--env-rotation", a.env_rotation);
   const float scale = parse_float("--env-scale", a.env_scale);
   if (scale < 0) throw Error("--env-scale must be >= 0");
@@ -174,30 +187,36 @@ void run(const RenderArgs& a) {
 const RegisterCommand reg{{"render", "Render a scene with one sampling strategy to a float OpenEXR",
                            [](CLI::App& sub) {
                              auto a = std::make_shared<RenderArgs>();
-                             sub.add_option("--scene", a->scene, "fig1, fig5 or a JSON scene file (docs/scene-format.md)")
+                             sub.add_option("--scene", a->scene, "fig1, fig5 or a JSON scene file (docs/scene-format.md)")->type_name("NAME|FILE")
                                  ->capture_default_str();
                              sub.add_option("--env", a->env,
-                                            "environment map (EXR/HDR); default: the scene's (see docs/scene-format.md)");
-                             sub.add_option("--env-rotation", a->env_rotation, "rotation of --env about +Z, degrees");
-                             sub.add_option("--env-scale", a->env_scale, "radiance scale of --env");
-                             sub.add_option("--strategy", a->strategy, "bsdf, env, mis, mis-comp, product or oracle")
+                                            "environment map (EXR/HDR); default: the scene's (see docs/scene-format.md)")->type_name("FILE");
+                             sub.add_option("--env-rotation", a->env_rotation, "rotation of --env about +Z, degrees")->type_name("DEG");
+                             sub.add_option("--env-scale", a->env_scale, "radiance scale of --env")->type_name("FLOAT");
+                             sub.add_option("--strategy", a->strategy, "bsdf, env, mis, mis-comp, product or oracle")->type_name("S")
                                  ->capture_default_str();
-                             sub.add_option("--spp", a->spp, "samples per pixel")->capture_default_str();
-                             sub.add_option("--seed", a->seed, "random seed")->capture_default_str();
-                             sub.add_option("--width", a->width, "image width (0: the scene's)")->capture_default_str();
-                             sub.add_option("--height", a->height, "image height (0: the scene's)")->capture_default_str();
-                             sub.add_option("--threads", a->threads, "worker threads (0: all)")->capture_default_str();
-                             sub.add_option("--integrator", a->integrator, "direct or path")->capture_default_str();
-                             sub.add_option("--heuristic", a->heuristic, "MIS heuristic: power or balance")
+                             sub.add_option("--spp", a->spp, "samples per pixel")->type_name("INT")->capture_default_str();
+                             sub.add_option("--seed", a->seed, "random seed")->type_name("INT")->capture_default_str();
+                             sub.add_option("--width", a->width, "image width (0: the scene's)")->type_name("INT")->capture_default_str();
+                             sub.add_option("--height", a->height, "image height (0: the scene's)")->type_name("INT")->capture_default_str();
+                             sub.add_option("--threads", a->threads, "worker threads (0: all)")->type_name("INT")->capture_default_str();
+                             sub.add_option("--integrator", a->integrator, "direct or path")->type_name("I")->capture_default_str();
+                             sub.add_option("--heuristic", a->heuristic, "MIS heuristic: power or balance")->type_name("H")
                                  ->capture_default_str();
-                             sub.add_option("--max-depth", a->max_depth, "path integrator: maximum bounces")
+                             sub.add_option("--max-depth", a->max_depth, "path integrator: maximum bounces")->type_name("INT")
                                  ->capture_default_str();
-                             sub.add_option("--oracle-res", a->oracle_res, "oracle: top cells per side")
+                             sub.add_option("--oracle-res", a->oracle_res, "oracle: top cells per side")->type_name("INT")
                                  ->capture_default_str();
-                             sub.add_option("--oracle-dirs", a->oracle_dirs, "oracle: BSDF evaluations per cell (square)")
+                             sub.add_option("--oracle-dirs", a->oracle_dirs, "oracle: BSDF evaluations per cell (square)")->type_name("INT")
                                  ->capture_default_str();
-                             sub.add_option("--out", a->out, "output OpenEXR file");
-                             sub.add_option("--id-out", a->id_out, "also write the object-id AOV (first hit per pixel)");
+                             sub.add_option("--proxy-transform", a->proxy_transform,
+                                            "product: proxy roughness transform (default: the library's)")->type_name("T");
+                             sub.add_option("--proxy-min-alpha", a->proxy_min_alpha,
+                                            "product: floor on the transformed proxy roughness (default: the library's)")->type_name("FLOAT");
+                             sub.add_option("--env-mix", a->env_mix,
+                                            "product: fraction of environment-only sampling mixed in (default: the library's)")->type_name("FLOAT");
+                             sub.add_option("--out", a->out, "output OpenEXR file")->type_name("FILE.exr");
+                             sub.add_option("--id-out", a->id_out, "also write the object-id AOV (first hit per pixel)")->type_name("FILE");
                              sub.add_flag("--quiet", a->quiet, "no progress bar");
                              sub.callback([a] { run(*a); });
                            }}};
