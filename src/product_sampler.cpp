@@ -1,6 +1,7 @@
 #include "envpis/product_sampler.h"
 
 #include <cmath>
+#include <limits>
 
 #include "distribution_util.h"
 #include "envpis/equal_area.h"
@@ -34,7 +35,9 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
     static_cast<const detail::Kernels*>(kernels_)->product_weights(arrays, detail::to_lobe_params(prepared_), prob);
     for (int c = 0; c < cells; ++c) cdf[c] = sum += prob[c];
   }
-  if (!(sum > 0) || !std::isfinite(sum)) {  // nothing the proxy can see: environment only
+  // Nothing the proxy can see: environment only. A sum below FLT_MIN (denormal lobe weights) counts as
+  // nothing too: its reciprocal would overflow to inf and so would every pdf (found by fuzzing).
+  if (!(sum >= std::numeric_limits<float>::min()) || !std::isfinite(sum)) {
     fallback_ = true;
     m = 1.0f;
   }
