@@ -1,6 +1,7 @@
 #include "render/render.h"
 
 #include <OpenImageIO/imageio.h>
+#include <sys/resource.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -14,6 +15,14 @@
 #include "render/rng.h"
 
 namespace envpis::render {
+
+namespace {
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec) + double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+}  // namespace
 
 void validate(const RenderOptions& o) {
   if (o.spp <= 0) throw Error("spp must be positive, got " + std::to_string(o.spp));
@@ -78,6 +87,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
 
   tbb::enumerable_thread_specific<std::optional<LightSampler>> samplers;
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = process_cpu_seconds();
   auto body = [&] {
     tbb::parallel_for(
         tbb::blocked_range<int>(0, tiles, 1),
@@ -144,6 +154,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     body();
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.cpu_seconds = process_cpu_seconds() - cpu0;
   r.nonfinite_pixels = nonfinite.load();
   return r;
 }

@@ -57,6 +57,8 @@ struct RenderResult {
   std::vector<float> variance;  ///< per pixel: variance of the pixel's mean of (R+G+B)/3 (sample variance / spp)
   std::vector<int> object_id;   ///< per pixel: object seen by the ray through the pixel centre, -1 = environment
   double seconds = 0;           ///< wall seconds of the sampling loop
+  double cpu_seconds = 0;       ///< process CPU seconds (all threads) of the sampling loop: less
+                                ///< sensitive than wall time to other processes sharing the machine
   double setup_seconds = 0;     ///< wall seconds spent building tables (0 when prebuilt)
   std::uint64_t samples = 0;    ///< width * height * spp
   std::size_t nonfinite_pixels = 0;  ///< pixels whose estimate was NaN/Inf: set to 0
