@@ -1,0 +1,43 @@
+// Shared fixtures of the benchmarks: the blender maps, their tables, and precomputed arrays of
+// shading points and random numbers (so the timed loops only cycle through memory).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "envpis/envpis.h"
+#include "kernels.h"
+
+namespace envpis_bench {
+
+/// Number of precomputed shading points / random values the loops cycle through (power of two).
+constexpr std::size_t kRing = 1024;
+
+/// Directory of the blender studio-light maps (ENVPIS_BENCH_WORLD_DIR overrides at run time).
+std::string world_dir();
+
+/// Maps and tables, loaded / built once on first use (never inside a timed loop).
+const envpis::EnvironmentMap& sunset_map();
+const envpis::EnvironmentMap& studio_map();
+/// sunset.exr resampled (bilinear, through EnvironmentMap::eval_texture) to 4096 x 2048.
+const envpis::EnvironmentMap& sunset_4k_map();
+const envpis::ImportanceTable& sunset_table();
+
+struct ShadingPoint {
+  envpis::Vec3 n, wo;
+  envpis::BsdfProxy proxy;
+};
+/// kRing shading points: random normals, outgoing directions (90% above the surface) and a mix of
+/// materials (diffuse, plastic, metal, glass, translucent) with random weights and roughnesses.
+const std::vector<ShadingPoint>& shading_points();
+/// kRing uniform points in [0,1)^2.
+const std::vector<envpis::Point2>& uniform_points();
+/// kRing uniform unit directions.
+const std::vector<envpis::Vec3>& uniform_directions();
+
+/// True when the CPU runs AVX2+FMA and the AVX2 kernels are compiled in.
+const envpis::detail::Kernels* avx2_kernels_if_supported();
+
+}  // namespace envpis_bench

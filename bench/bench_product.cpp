@@ -1,0 +1,184 @@
+// Per-shading-point product sampling on a realistic table (blender's sunset.exr, T = 12 -> 144 cells).
+// Every timed loop cycles through kRing precomputed shading points (random normal, wo and proxy of a
+// mixed material) so branch predictors and caches see realistic variety. One iteration = one
+// shading point (or one sample / pdf evaluation).
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "bench_common.h"
+#include "proxy_internal.h"
+
+namespace envpis_bench {
+namespace {
+
+using namespace envpis;
+
+constexpr std::size_t kMask = kRing - 1;
+
+void table_counters(benchmark::State& state, const ImportanceTable& t) {
+  state.counters["cells"] = t.cell_count();
+}
+
+// ---- product CDF build: ProductSampler::prepare (proxy preparation + weights + normalized CDF) ----
+
+void product_prepare(benchmark::State& state, bool simd) {
+  const ImportanceTable& table = sunset_table();
+  const auto& pts = shading_points();
+  ProductSamplerOptions opt;
+  opt.simd = simd;
+  ProductSampler ps(table, opt);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const ShadingPoint& s = pts[i++ & kMask];
+    benchmark::DoNotOptimize(ps.prepare(s.n, s.wo, s.proxy));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(simd ? simd_name() : "scalar reference");
+  table_counters(state, table);
+}
+void BM_ProductPrepare_Scalar(benchmark::State& s) { product_prepare(s, false); }
+void BM_ProductPrepare_SIMD(benchmark::State& s) { product_prepare(s, true); }
+
+// ---- the product-weights kernel alone (T^2 cone evaluations x E[c]), per instruction set ----
+
+void product_weights_kernel(benchmark::State& state, const detail::Kernels* k) {
+  if (!k) {
+    state.SkipWithError("kernel set not available on this CPU");
+    return;
+  }
+  const ImportanceTable& table = sunset_table();
+  const auto& pts = shading_points();
+  std::vector<detail::LobeParams> lobes(kRing);
+  for (std::size_t j = 0; j < kRing; ++j)
+    lobes[j] = detail::to_lobe_params(prepare_proxy(pts[j].proxy, pts[j].n, pts[j].wo));
+  const detail::CellArrays cells{table.soa_axis_x(), table.soa_axis_y(), table.soa_axis_z(),
+                                 table.soa_cos(),    table.soa_sin(),    table.soa_prob(),
+                                 table.padded_cell_count()};
+  std::vector<float> out(table.padded_cell_count());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    k->product_weights(cells, lobes[i++ & kMask], out.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  table_counters(state, table);
+}
+void BM_ProductWeights_KernelScalar(benchmark::State& s) { product_weights_kernel(s, &detail::kernels_scalar()); }
+void BM_ProductWeights_KernelSSE2(benchmark::State& s) { product_weights_kernel(s, &detail::kernels_sse2()); }
+void BM_ProductWeights_KernelAVX2(benchmark::State& s) { product_weights_kernel(s, avx2_kernels_if_supported()); }
+
+// ---- the proxy preparation alone (axes, roughness transform): part of prepare() ----
+
+void BM_PrepareProxy(benchmark::State& state) {
+  const auto& pts = shading_points();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const ShadingPoint& s = pts[i++ & kMask];
+    PreparedProxy p = prepare_proxy(s.proxy, s.n, s.wo);
+    benchmark::DoNotOptimize(p);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+// ---- the paper's per-shading-point cost: build the product CDF, draw one sample with its pdf ----
+
+void product_prepare_and_sample(benchmark::State& state, bool simd) {
+  const ImportanceTable& table = sunset_table();
+  const auto& pts = shading_points();
+  const auto& us = uniform_points();
+  ProductSamplerOptions opt;
+  opt.simd = simd;
+  ProductSampler ps(table, opt);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const std::size_t j = i++ & kMask;
+    const ShadingPoint& s = pts[j];
+    ps.prepare(s.n, s.wo, s.proxy);
+    const DirectionSample d = ps.sample(us[j]);  // d.pdf is pdf(d.direction)
+    benchmark::DoNotOptimize(d);
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(simd ? simd_name() : "scalar reference");
+  table_counters(state, table);
+}
+void BM_ProductPrepareAndSample_Scalar(benchmark::State& s) { product_prepare_and_sample(s, false); }
+void BM_ProductPrepareAndSample_SIMD(benchmark::State& s) { product_prepare_and_sample(s, true); }
+
+// ---- sampling from prepared distributions (64 different shading points, cycled) ----
+
+constexpr std::size_t kSamplers = 64;
+
+std::vector<ProductSampler> prepared_samplers() {
+  const ImportanceTable& table = sunset_table();
+  const auto& pts = shading_points();
+  std::vector<ProductSampler> v;
+  v.reserve(kSamplers);
+  for (std::size_t j = 0; j < kSamplers; ++j) {
+    v.emplace_back(table);
+    v.back().prepare(pts[j].n, pts[j].wo, pts[j].proxy);
+  }
+  return v;
+}
+
+void BM_ProductSample(benchmark::State& state) {  // sample() = choose cell + fine sample + pdf
+  const auto samplers = prepared_samplers();
+  const auto& us = uniform_points();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const std::size_t j = i++;
+    const DirectionSample d = samplers[j % kSamplers].sample(us[j & kMask]);
+    benchmark::DoNotOptimize(d);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+void BM_ProductPdf(benchmark::State& state) {  // pdf of an arbitrary direction (MIS of a BSDF sample)
+  const auto samplers = prepared_samplers();
+  const auto& ds = uniform_directions();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const std::size_t j = i++;
+    benchmark::DoNotOptimize(samplers[j % kSamplers].pdf(ds[j & kMask]));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+// ---- environment-only sampling from the two-level table ----
+
+void BM_EnvSample(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table();
+  const auto& us = uniform_points();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const DirectionSample d = table.sample(us[i++ & kMask]);
+    benchmark::DoNotOptimize(d);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+void BM_EnvPdf(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table();
+  const auto& ds = uniform_directions();
+  std::size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(table.pdf(ds[i++ & kMask]));
+  state.SetItemsProcessed(state.iterations());
+}
+
+}  // namespace
+
+BENCHMARK(BM_ProductPrepare_Scalar);
+BENCHMARK(BM_ProductPrepare_SIMD);
+BENCHMARK(BM_ProductWeights_KernelScalar);
+BENCHMARK(BM_ProductWeights_KernelSSE2);
+BENCHMARK(BM_ProductWeights_KernelAVX2);
+BENCHMARK(BM_PrepareProxy);
+BENCHMARK(BM_ProductPrepareAndSample_Scalar);
+BENCHMARK(BM_ProductPrepareAndSample_SIMD);
+BENCHMARK(BM_ProductSample);
+BENCHMARK(BM_ProductPdf);
+BENCHMARK(BM_EnvSample);
+BENCHMARK(BM_EnvPdf);
+
+}  // namespace envpis_bench
