@@ -46,7 +46,8 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
     const float a = m < 1.0f ? (1.0f - m) / sum : 0.0f;
     float run = 0;
     for (int c = 0; c < cells; ++c) {
-      prob[c] = a * prob[c] + m * e[c];
+      // Not a * prob[c] when a == 0: the fallback after an infinite product weight would give 0 * inf = NaN.
+      prob[c] = (a > 0.0f ? a * prob[c] : 0.0f) + m * e[c];
       cdf[c] = run += prob[c];
     }
     sum = run;
