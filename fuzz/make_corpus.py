@@ -156,6 +156,13 @@ REGRESSIONS = {
         # was below FLT_MIN, 1/sum overflowed and every pdf was inf (fixed in src/product_sampler.cpp).
         "regress_denormal_proxy_weight":
         "QD+ABgCxBQAAAAAAAAAAADAAEAAwABAAMAAQADAA8AAwADAAEAAwABAAMADwADAAEAAwABAAMAAQQDAAEAAwABB+AAAABwAAAAkAAAACAAA=",
+        # ProductSampler::prepare with a refraction weight of FLT_MAX: a product weight was inf, the
+        # environment fallback computed 0 * inf = NaN and prepare() returned invalid for a valid shading
+        # point (fixed in src/product_sampler.cpp).
+        "regress_infinite_product_weight":
+        "AgCpAQMAAM0EADAzAwAwuAoAMABQAAAAMAAQADBmDgAAAAAAMJoBAAAAAAAAAAAAMDMDAgCpAQMAAM0EADAzAwAwuAoAMABQAAAAMAAQADBm"
+        "DgAAAAAAMJoBAAAAAAAAAAAAMDMDADDNDAAwzQQAMDOlADC4CgAwAFAAAAAAAAAAAAAAAAAAMABQAAAAAAAAAAAAAAAAADAAUAAAMM0MADDN"
+        "BAAwM6UAMLgKADAAUAAAAAAAAAAAAAAAAAAwAFAAAAAAAAAAAAAAAAAAMABQAA==",
     },
 }
 

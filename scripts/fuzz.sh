@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan, library instrumented too) in build-fuzz
+# and runs each for a bounded time, starting from a copy of its seed corpus in a temporary directory
+# (new inputs never land in the repository). Fails if any target finds a crash, a sanitizer report, a
+# leak or a contract violation; the reproducers are kept in build-fuzz/fuzz-artifacts/<target>/.
+#
+# Usage: bash scripts/fuzz.sh
+# Environment:
+#   FUZZ_SECONDS   seconds per target (default 60)
+#   FUZZ_TARGETS   space-separated targets (default: fuzz_image_load fuzz_table_product)
+#   FUZZ_PARALLEL  1 (default): run the targets at the same time (one per core); 0: one after another
+#   FUZZ_BUILD     build directory (default build-fuzz)
+#
+# Out-of-memory and timeout reports of fuzz_image_load do not fail the run (they are listed): it runs
+# in fork mode with -ignore_ooms/-ignore_timeouts because OpenEXR 3.1 and OpenImageIO 2.4 allocate
+# whatever a corrupt header claims (a 2 GB string attribute, a 19 GB scanline buffer for a 6M-texel-wide
+# image), which is third-party behaviour, not a crash; see fuzz/README.md. fuzz_table_product bounds
+# its own sizes, so there an OOM or a timeout is a finding like any other.
+#
+# Reproduce a finding:  build-fuzz/fuzz/<target> build-fuzz/fuzz-artifacts/<target>/<file>
+# (fuzz_table_product: prefix ENVPIS_FUZZ_VERBOSE=1 to print what the input decodes to).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+
+SECS=${FUZZ_SECONDS:-60}
+BUILD=${FUZZ_BUILD:-build-fuzz}
+PARALLEL=${FUZZ_PARALLEL:-1}
+read -r -a TARGETS <<<"${FUZZ_TARGETS:-fuzz_image_load fuzz_table_product}"
+
+t0=$(date +%s)
+cmake -S . -B "$BUILD" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DENVPIS_BUILD_FUZZ=ON -DENVPIS_BUILD_TESTS=OFF -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS=OFF >/dev/null
+cmake --build "$BUILD" -j"$(nproc)" --target "${TARGETS[@]}"
+echo "fuzz: build $(($(date +%s) - t0)) s"
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/envpis-fuzz.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$BUILD/fuzz-logs"
+
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+# Full stacks at allocation time, so that scripts/lsan.supp can match third-party leaks.
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0}
+
+run_target() {  # run_target <target>; returns libFuzzer's status
+  local t=$1 dir="$work/$1"
+  mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/tmp"
+  cp "fuzz/corpus/$t/"* "$dir/corpus/"
+  local args=(-max_total_time="$SECS" -artifact_prefix="$dir/artifacts/" -print_final_stats=1
+              -rss_limit_mb=3072)
+  local asan=detect_leaks=1
+  case "$t" in
+    fuzz_image_load)
+      args+=(-fork=1 -ignore_ooms=1 -ignore_timeouts=1 -timeout=20 -max_len=8192)
+      asan+=:fast_unwind_on_malloc=0 ;;
+    fuzz_table_product)
+      args+=(-timeout=30 -max_len=16384) ;;
+  esac
+  # TMPDIR: the harness's scratch files and libFuzzer's fork-mode directories stay in $work.
+  TMPDIR="$dir/tmp" ASAN_OPTIONS=${ASAN_OPTIONS:-$asan} \
+    "$BUILD/fuzz/$t" "${args[@]}" "$dir/corpus" >"$BUILD/fuzz-logs/$t.log" 2>&1
+}
+
+report() {  # report <target> <status>
+  local t=$1 status=$2 dir="$work/$1" log="$BUILD/fuzz-logs/$1.log"
+  # Inputs run: the final stats line, or in fork mode the parent's last "#<runs>: cov: ..." line.
+  local runs
+  runs=$({ grep -h 'stat::number_of_executed_units' "$log" || true; } | awk '{s = $2} END {print s + 0}')
+  if [ "$runs" = 0 ]; then
+    runs=$({ grep -E '^#[0-9]+: cov' "$log" || true; } | tail -n 1 | sed -E 's/^#([0-9]+):.*/\1/')
+  fi
+  local ignored
+  ignored=$(find "$dir/artifacts" -name 'oom-*' -o -name 'timeout-*' -o -name 'slow-unit-*' | wc -l)
+  echo "fuzz: $t: $runs inputs in ${SECS} s, corpus $(ls "fuzz/corpus/$t" | wc -l) seeds -> $(ls "$dir/corpus" | wc -l) inputs, $ignored ignored oom/timeout, status $status (log: $log)"
+  if [ "$status" != 0 ] || [ -n "$(ls -A "$dir/artifacts")" ]; then
+    mkdir -p "$BUILD/fuzz-artifacts/$t"
+    cp "$dir/artifacts/"* "$BUILD/fuzz-artifacts/$t/" 2>/dev/null || true
+    ls "$dir/artifacts" | sed "s|^|fuzz: $t: artifact $BUILD/fuzz-artifacts/$t/|"
+  fi
+  if [ "$status" != 0 ]; then
+    echo "fuzz: $t FAILED; the end of its log:"
+    grep -vE '^#[0-9]+|^libpng|^INFO:' "$log" | tail -n 60
+  fi
+}
+
+t1=$(date +%s)
+declare -A status
+if [ "$PARALLEL" = 1 ]; then
+  declare -A pids
+  for t in "${TARGETS[@]}"; do
+    run_target "$t" &
+    pids[$t]=$!
+  done
+  for t in "${TARGETS[@]}"; do
+    if wait "${pids[$t]}"; then status[$t]=0; else status[$t]=$?; fi
+  done
+else
+  for t in "${TARGETS[@]}"; do
+    if run_target "$t"; then status[$t]=0; else status[$t]=$?; fi
+  done
+fi
+
+failed=0
+for t in "${TARGETS[@]}"; do
+  report "$t" "${status[$t]}"
+  [ "${status[$t]}" = 0 ] || failed=1
+done
+echo "fuzz: fuzzing $(($(date +%s) - t1)) s"
+exit $failed
