@@ -1,0 +1,276 @@
+// envpis compare report: builds the page from the metrics embedded in index.html (the same data as
+// metrics.json). Inlined by `envpis compare`; no external resource. Linked zoom: hovering over any image
+// moves one square region in every image of the page, shown magnified in the inset strips; a click
+// pins the region (click again to follow the pointer), the zoom buttons change the magnification.
+"use strict";
+(function () {
+  const M = JSON.parse(document.getElementById("metrics").textContent);
+  const root = document.getElementById("report");
+  const banner = document.getElementById("banner");
+  const W = M.width, H = M.height;
+
+  // ------------------------------------------------------------------ helpers
+  function el(tag, attrs, children) {
+    const e = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs || {})) {
+      if (k === "class") e.className = v;
+      else if (k === "text") e.textContent = v;
+      else if (k === "html") e.innerHTML = v;
+      else e.setAttribute(k, v);
+    }
+    for (const c of children || []) if (c) e.appendChild(typeof c === "string" ? document.createTextNode(c) : c);
+    return e;
+  }
+  function fmt(x, digits) {
+    if (x === null || x === undefined || !isFinite(x)) return "\u2013";
+    const a = Math.abs(x);
+    if (a !== 0 && (a < 1e-3 || a >= 1e5)) return x.toExponential((digits || 3) - 1);
+    return x.toPrecision(digits || 3);
+  }
+  function ratio(a, b) { return a > 0 && b > 0 ? a / b : NaN; }
+  function regionLabel(name) { return name.startsWith("conductor-") ? "GGX " + name.slice(10) : name; }
+  const brokenImages = [];
+  function showBroken() {
+    banner.innerHTML = "";
+    if (M.plots_unavailable)
+      banner.appendChild(el("p", { class: "warn", text: "Plots are unavailable: " + M.plots_unavailable + "." }));
+    if (brokenImages.length)
+      banner.appendChild(el("p", { class: "warn", text: "Images that failed to load: " + brokenImages.join(", ") }));
+  }
+  function image(src, alt) {
+    const img = el("img", { src: src, alt: alt, width: String(W), height: String(H) });
+    img.addEventListener("error", () => { brokenImages.push(src); showBroken(); });
+    return img;
+  }
+
+  // ------------------------------------------------------------------ header
+  const ref = M.reference;
+  document.getElementById("subtitle").textContent =
+    `${M.scene}, ${M.width}\u00d7${M.height}, environment ${M.environment}, ${M.integrator} lighting` +
+    (M.max_depth ? ` (max depth ${M.max_depth})` : "") +
+    `, ${M.heuristic} heuristic, ${M.threads} threads, ${M.date}. Reference: ${ref.strategy} at ${ref.spp} spp ` +
+    `(seed ${ref.seed}, independent of the measured images${ref.cached ? ", cached" : ""}).`;
+  showBroken();
+
+  // ------------------------------------------------------------------ summary tables
+  function summaryTable(block, title, note) {
+    const sec = el("section", {}, [el("h2", { text: title })]);
+    if (note) sec.appendChild(el("p", { class: "note", text: note }));
+    const byName = Object.fromEntries(block.strategies.map((s) => [s.strategy, s]));
+    const mis = byName["mis"], prod = byName["product"];
+    const head = ["strategy", "spp", "seconds", "relMSE", "efficiency", "mis / this", "this / product", "mean", "NaN px"];
+    const t = el("table", {}, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
+    const best = Math.min(...block.strategies.map((s) => s.relmse));
+    for (const s of block.strategies) {
+      t.appendChild(el("tr", {}, [
+        el("td", { text: s.strategy }), el("td", { text: String(s.spp) }), el("td", { text: fmt(s.seconds, 3) }),
+        el("td", { class: s.relmse === best ? "best" : "", text: fmt(s.relmse, 4) }),
+        el("td", { text: fmt(s.efficiency, 4) }),
+        el("td", { text: mis ? fmt(ratio(mis.relmse, s.relmse), 3) : "\u2013" }),
+        el("td", { text: prod ? fmt(ratio(s.relmse, prod.relmse), 3) : "\u2013" }),
+        el("td", { text: fmt(s.mean, 4) }),
+        el("td", { class: s.nan_count ? "worse" : "", text: String(s.nan_count) }),
+      ]));
+    }
+    sec.appendChild(t);
+    return sec;
+  }
+  function regionTable(block, title) {
+    const regions = M.regions;
+    const sec = el("section", {}, [el("h3", { text: title })]);
+    const prod = block.strategies.find((s) => s.strategy === "product");
+    const head = ["object"].concat(block.strategies.map((s) => s.strategy + " relMSE"));
+    const others = block.strategies.filter((s) => s.strategy !== "product");
+    if (prod) for (const s of others) head.push(s.strategy + " / product");
+    const t = el("table", {}, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
+    for (const r of regions) {
+      const vals = block.strategies.map((s) => (s.regions.find((x) => x.id === r.id) || {}).relmse);
+      const best = Math.min(...vals.filter((v) => v !== null && v !== undefined));
+      const row = [el("td", { text: regionLabel(r.name) })];
+      vals.forEach((v) => row.push(el("td", { class: v === best ? "best" : "", text: fmt(v, 3) })));
+      if (prod) {
+        const p = (prod.regions.find((x) => x.id === r.id) || {}).relmse;
+        for (const s of others) {
+          const q = ratio((s.regions.find((x) => x.id === r.id) || {}).relmse, p);
+          row.push(el("td", { class: q < 1 ? "worse" : "", text: fmt(q, 3) }));
+        }
+      }
+      t.appendChild(el("tr", {}, row));
+    }
+    sec.appendChild(t);
+    return sec;
+  }
+  function biasTable(block) {
+    const sec = el("section", {}, [el("h3", { text: "Bias check: z-scores of each object's mean against the reference" })]);
+    sec.appendChild(el("p", { class: "note", text:
+      "z = (mean \u2212 reference mean) / sqrt(var + reference var) per object, from the renderer's per-pixel " +
+      "variance. An unbiased strategy gives |z| of a few at most; |z| > 5 is flagged." }));
+    const head = ["object"].concat(block.strategies.map((s) => s.strategy));
+    const t = el("table", {}, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
+    for (const r of M.regions) {
+      const row = [el("td", { text: regionLabel(r.name) })];
+      for (const s of block.strategies) {
+        const z = (s.regions.find((x) => x.id === r.id) || {}).z;
+        row.push(el("td", { class: z !== null && Math.abs(z) > 5 ? "worse" : "", text: fmt(z, 2) }));
+      }
+      t.appendChild(el("tr", {}, row));
+    }
+    sec.appendChild(t);
+    return sec;
+  }
+
+  root.appendChild(summaryTable(M.equal_spp, `Equal samples: ${M.equal_spp.spp} spp`,
+    "Seconds: wall time of the sampling loop, minimum over the timing repeats. Ratios above 1 in " +
+    "\u201cmis / this\u201d mean less error than mis."));
+  if (M.overhead) {
+    root.appendChild(el("p", { html:
+      `<b>Overhead</b> time(product) / time(mis) at ${M.overhead.spp} spp, ${M.overhead.threads} threads: ` +
+      `<b>${fmt(M.overhead.ratio, 3)}</b> (${fmt(M.overhead.product_seconds, 3)} s / ${fmt(M.overhead.mis_seconds, 3)} s).` }));
+  }
+  if (M.equal_time) {
+    root.appendChild(summaryTable(M.equal_time, `Equal time: ${fmt(M.equal_time.budget_seconds, 3)} s of sampling each`,
+      "Each strategy's spp is the budget divided by its seconds per sample at equal spp (its calibration)."));
+  }
+  // ------------------------------------------------------------------ plots
+  const ps = el("section", {}, [el("h2", { text: "Plots" })]);
+  if (M.plots && M.plots.figures && M.plots.figures.length) {
+    const g = el("div", { class: "plots" });
+    for (const f of M.plots.figures) {
+      const img = el("img", { src: f.file, alt: f.title });
+      img.addEventListener("error", () => { brokenImages.push(f.file); showBroken(); });
+      g.appendChild(el("figure", {}, [img, el("figcaption", {}, [el("b", { text: f.title + ". " }), f.caption])]));
+    }
+    ps.appendChild(g);
+  } else {
+    ps.appendChild(el("p", { class: "warn", text: "Plots are unavailable" + (M.plots_unavailable ? ": " + M.plots_unavailable : "") + "." }));
+  }
+  root.appendChild(ps);
+
+  if (M.regions && M.regions.length) {
+    const sec = el("section", {}, [el("h2", { text: "Per object (fig1: per roughness)" })]);
+    sec.appendChild(regionTable(M.equal_spp, "relMSE per object at equal spp"));
+    if (M.equal_time) sec.appendChild(regionTable(M.equal_time, "relMSE per object at equal time"));
+    root.appendChild(sec);
+  }
+  // ------------------------------------------------------------------ images with linked zoom
+  const zoom = { x: W / 2, y: H / 2, side: Math.max(8, Math.round(Math.min(W, H) / 4)), pinned: false };
+  const markers = [], insets = [];
+  function update() {
+    const s = zoom.side;
+    const x0 = Math.min(Math.max(zoom.x - s / 2, 0), Math.max(0, W - s));
+    const y0 = Math.min(Math.max(zoom.y - s / 2, 0), Math.max(0, H - s));
+    for (const m of markers) {
+      m.style.display = "block";
+      m.style.left = (100 * x0 / W) + "%";
+      m.style.top = (100 * y0 / H) + "%";
+      m.style.width = (100 * s / W) + "%";
+      m.style.height = (100 * s / H) + "%";
+    }
+    for (const d of insets) {
+      const px = d.clientWidth || 160;
+      const k = px / s;
+      d.style.backgroundSize = `${W * k}px ${H * k}px`;
+      d.style.backgroundPosition = `${-x0 * k}px ${-y0 * k}px`;
+    }
+  }
+  function track(wrap) {
+    const at = (ev) => {
+      const r = wrap.getBoundingClientRect();
+      zoom.x = (ev.clientX - r.left) / r.width * W;
+      zoom.y = (ev.clientY - r.top) / r.height * H;
+      update();
+    };
+    wrap.addEventListener("mousemove", (ev) => { if (!zoom.pinned) at(ev); });
+    wrap.addEventListener("click", (ev) => { zoom.pinned = !zoom.pinned; at(ev); });
+  }
+  function imageWithMarker(src, alt) {
+    const marker = el("div", { class: "marker" });
+    markers.push(marker);
+    const wrap = el("div", { class: "imgwrap" }, [image(src, alt), marker]);
+    track(wrap);
+    return wrap;
+  }
+  function inset(src, label) {
+    const d = el("div", { class: "inset", title: label });
+    d.style.backgroundImage = `url("${src}")`;
+    insets.push(d);
+    return el("div", { style: "flex:1;min-width:0" }, [d, el("div", { class: "cap", style: "font-size:12px", text: label })]);
+  }
+  function legend() {
+    const em = M.error_map;
+    const stops = em.colormap.map((c, i) => `rgb(${c[0]},${c[1]},${c[2]}) ${(100 * i / (em.colormap.length - 1)).toFixed(1)}%`);
+    const bar = el("div", { class: "bar" });
+    bar.style.background = `linear-gradient(to right, ${stops.join(", ")})`;
+    return el("div", { class: "legend" }, [
+      el("span", { text: "error map: per-pixel relative squared error, 1e" + em.log10_min }), bar,
+      el("span", { text: "1e" + em.log10_max + " (log scale)" })]);
+  }
+  function zoomControls() {
+    const c = el("div", { class: "controls" }, [el("span", { text: "Zoom region: " })]);
+    for (const f of [1 / 8, 1 / 4, 1 / 2]) {
+      const side = Math.max(4, Math.round(Math.min(W, H) * f));
+      const b = el("button", { type: "button", text: side + " px" });
+      b.addEventListener("click", () => { zoom.side = side; update(); });
+      c.appendChild(b);
+    }
+    c.appendChild(el("span", { text: "  Hover over any image to move the region in all of them; click to pin it." }));
+    return c;
+  }
+  function imageSection(block, title) {
+    const sec = el("section", {}, [el("h2", { text: title }), zoomControls()]);
+    const strip = el("div", { class: "insets" }, [inset(ref.png, "reference")]);
+    for (const s of block.strategies) strip.appendChild(inset(s.images.png, `${s.strategy} (${s.spp} spp)`));
+    const estrip = el("div", { class: "insets" }, [el("div", { style: "flex:1" })]);
+    for (const s of block.strategies) estrip.appendChild(inset(s.images.error_png, `${s.strategy} error`));
+    sec.appendChild(strip);
+    sec.appendChild(estrip);
+    sec.appendChild(legend());
+    const grid = el("div", { class: "grid" });
+    if (W / H > 2.2) grid.style.gridTemplateColumns = "1fr";
+    const refPair = el("div", { class: "pair" }, [imageWithMarker(ref.png, "reference")]);
+    if (W / H > 2.2) refPair.classList.add("side");
+    grid.appendChild(el("div", { class: "card" }, [
+      el("div", { class: "cap" }, [el("b", { text: "reference" }), el("span", { text: `${ref.strategy}, ${ref.spp} spp` })]),
+      refPair]));
+    for (const s of block.strategies) {
+      const pair = el("div", { class: "pair" }, [imageWithMarker(s.images.png, s.strategy),
+        imageWithMarker(s.images.error_png, s.strategy + " error map")]);
+      if (W / H > 2.2) pair.classList.add("side");
+      grid.appendChild(el("div", { class: "card" }, [
+        el("div", { class: "cap" }, [el("b", { text: s.strategy }),
+          el("span", { text: `${s.spp} spp, ${fmt(s.seconds, 3)} s, relMSE ${fmt(s.relmse, 3)}; ${W / H > 2.2 ? "left" : "top"}: image, ${W / H > 2.2 ? "right" : "bottom"}: error map` })]),
+        pair]));
+    }
+    sec.appendChild(grid);
+    return sec;
+  }
+  root.appendChild(imageSection(M.equal_spp, `Images at equal spp (${M.equal_spp.spp} spp)`));
+  if (M.equal_time) root.appendChild(imageSection(M.equal_time, `Images at equal time (${fmt(M.equal_time.budget_seconds, 3)} s)`));
+
+  // ------------------------------------------------------------------ convergence numbers, bias, settings
+  const conv = M.convergence || {};
+  const names = M.equal_spp.strategies.map((s) => s.strategy).filter((n) => conv[n]);
+  if (names.length) {
+    const sec = el("section", {}, [el("h3", { text: "Convergence: relMSE at each spp" })]);
+    const spps = conv[names[0]].map((p) => p.spp);
+    const t = el("table", {}, [el("tr", {}, [el("th", { text: "spp" })].concat(names.map((n) => el("th", { text: n }))))]);
+    spps.forEach((n, i) => t.appendChild(el("tr", {}, [el("td", { text: String(n) })].concat(
+      names.map((s) => el("td", { text: fmt((conv[s][i] || {}).relmse, 3) }))))));
+    sec.appendChild(t);
+    root.appendChild(sec);
+  }
+  if (M.regions && M.regions.length) root.appendChild(biasTable(M.equal_spp));
+  const st = el("section", {}, [el("h2", { text: "Settings" })]);
+  st.appendChild(el("pre", { class: "cmd", text: M.command }));
+  st.appendChild(el("p", { class: "note", text:
+    `Reference: ${ref.strategy}, ${ref.spp} spp, seed ${ref.seed}, ${fmt(ref.seconds, 3)} s` +
+    `${ref.cached ? " (from the cache " + ref.cache_dir + ")" : ""}; its own noise adds about ` +
+    `${fmt(ref.relmse_floor, 2)} to every relMSE. Product options: ${JSON.stringify(M.product_options)}. ` +
+    `Oracle: ${M.oracle_options.resolution}\u00b2 cells, ${M.oracle_options.directions} BSDF evaluations per cell. ` +
+    `Table build seconds: ${JSON.stringify(M.table_seconds)}. envpis ${M.version}.` }));
+  root.appendChild(st);
+
+  window.addEventListener("resize", update);
+  window.addEventListener("load", update);
+  update();
+})();
