@@ -12,6 +12,9 @@
 #include "distribution_util.h"
 #include "envpis/equal_area.h"
 
+#define ENVPIS_KERNEL_NS scalar
+#include "kernels_impl.inl"
+
 namespace envpis {
 
 namespace {
@@ -55,15 +58,64 @@ float ImportanceTable::importance(int x, int y) const { return func_[texel_index
 
 void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, bool compensated) {
   const std::size_t total = static_cast<std::size_t>(N_) * N_;
+  // The cell-major texel index is separable: index(x, y) = row_base[y] + col_base[x].
+  std::vector<std::uint32_t> row_base(N_), col_base(N_);
+  for (int i = 0; i < N_; ++i) {
+    const std::size_t c = i / F_, l = i - c * F_;
+    row_base[i] = static_cast<std::uint32_t>(c * T_ * F_ * F_ + l * F_);
+    col_base[i] = static_cast<std::uint32_t>(c * F_ * F_ + l);
+  }
+  auto index = [&](int x, int y) { return std::size_t(row_base[y]) + col_base[x]; };
   const double table_texel_sr = 4.0 * kPi / double(total);
   const int w = map.width(), h = map.height();
   const bool latlong = map.layout() != MapLayout::EqualArea;
   // Solid angle of the map texel at map-space direction d.
   const double ea_src_sr = 4.0 * kPi / (double(w) * h);
-  auto source_texel_sr = [&](Vec3 md) {
-    if (!latlong) return ea_src_sr;
-    const double s = std::sqrt(std::max(0.0, 1.0 - double(md.z) * md.z));
-    return (2.0 * kPi / w) * (kPi / h) * std::max(s, std::sin(0.5 * kPi / h));
+  // A lat-long texel at polar angle theta is smaller than half a table texel when sin(theta) is below
+  // this (its solid angle is about (2 pi / w)(pi / h) sin theta).
+  const float small_sin = latlong ? static_cast<float>(0.5 * table_texel_sr / ((2.0 * kPi / w) * (kPi / h))) : 0.0f;
+  const bool all_small = !latlong && ea_src_sr < 0.5 * table_texel_sr;
+
+  // Importance (channel average) of the map's texels, and a bilinear look-up of it for a world
+  // direction that matches EnvironmentMap::eval (same conventions) with fast polynomial atan2.
+  std::vector<float> lum(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const Rgb L = map.texel(x, y);
+      lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
+    }
+  auto lum_at = [&](int x, int y) { return lum[static_cast<std::size_t>(y) * w + x]; };
+  auto lookup = [&](Vec3 world) -> float {
+    const Vec3 md = map.to_map(world);
+    if (!latlong) {
+      const Point2 p = equal_area_sphere_to_square(md);
+      const float px = p.x * w - 0.5f, py = p.y * h - 0.5f;
+      const float fx = std::floor(px), fy = std::floor(py), tx = px - fx, ty = py - fy;
+      float acc = 0;
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          int xi = static_cast<int>(fx) + i, yi = static_cast<int>(fy) + j;
+          if (!equal_area_wrap(w, xi, yi)) {
+            xi = std::clamp(xi, 0, w - 1);
+            yi = std::clamp(yi, 0, h - 1);
+          }
+          acc += lum_at(xi, yi) * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
+        }
+      return acc;
+    }
+    float phi = detail::scalar::atan2_fast(md.y, md.x);
+    if (phi < 0) phi += 2 * kPi;
+    const float theta = detail::scalar::atan2_fast(std::sqrt(md.x * md.x + md.y * md.y), md.z);
+    const float px = phi * (0.5f * kInvPi) * w - 0.5f, py = theta * kInvPi * h - 0.5f;
+    const float fx = std::floor(px), fy = std::floor(py), tx = px - fx, ty = py - fy;
+    int x0 = static_cast<int>(fx), x1 = x0 + 1;
+    if (x0 < 0) x0 += w;
+    if (x1 >= w) x1 -= w;
+    x0 = std::clamp(x0, 0, w - 1);
+    x1 = std::clamp(x1, 0, w - 1);
+    const int y0 = std::clamp(static_cast<int>(fy), 0, h - 1), y1 = std::clamp(static_cast<int>(fy) + 1, 0, h - 1);
+    return (lum_at(x0, y0) * (1 - tx) + lum_at(x1, y0) * tx) * (1 - ty) +
+           (lum_at(x0, y1) * (1 - tx) + lum_at(x1, y1) * tx) * ty;
   };
 
   // 1. Gather: the average of s x s stratified bilinear look-ups over each table texel. Accurate where
@@ -88,14 +140,13 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, b
           double acc = 0;
           for (int sx = 0; sx < s; ++sx) {
             const std::size_t i = static_cast<std::size_t>(x) * s + sx;
-            const Rgb L = map.eval({dx[i], dy[i], dz[i]});
-            acc += (double(L.r) + L.g + L.b) / 3.0;
+            acc += lookup({dx[i], dy[i], dz[i]});
           }
-          gather[texel_index(x, y)] += static_cast<float>(acc / (double(s) * s));
+          gather[index(x, y)] += static_cast<float>(acc / (double(s) * s));
           if (sy == s / 2) {
             const std::size_t i = static_cast<std::size_t>(x) * s + s / 2;
-            const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
-            small_source[texel_index(x, y)] = source_texel_sr(md) < 0.5 * table_texel_sr;
+            const float mz = map.to_map({dx[i], dy[i], dz[i]}).z;
+            small_source[index(x, y)] = all_small || 1.0f - mz * mz < small_sin * small_sin;
           }
         }
       }
@@ -110,14 +161,25 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, b
   // Rows are processed in chunks: parallel mapping, serial accumulation.
   std::vector<double> splat(total, 0.0);
   const double table_side = std::sqrt(table_texel_sr);
+  // Sub-texel splits only where the splat is used (map texels smaller than half a table texel);
+  // elsewhere one point per map texel is enough for the splat's role as a fallback.
   auto splits = [&](int y, int& kx, int& ky) {
     const double theta = kPi * (y + 0.5) / h;
     const double height = latlong ? kPi / h : std::sqrt(ea_src_sr);
     const double width = latlong ? 2.0 * kPi / w * std::max(std::sin(theta), std::sin(0.5 * kPi / h))
                                  : std::sqrt(ea_src_sr);
+    kx = ky = 1;
+    if (width * height >= table_texel_sr) return;  // 2x margin over the small-texel threshold
     kx = std::clamp(static_cast<int>(std::ceil(2.0 * width / table_side)), 1, 16);
     ky = std::clamp(static_cast<int>(std::ceil(2.0 * height / table_side)), 1, 16);
   };
+  // Azimuth sines and cosines of the map's column centres (lat-long, one split per column).
+  std::vector<float> col_cos(w), col_sin(w);
+  for (int x = 0; x < w; ++x) {
+    const double phi = 2.0 * kPi * (x + 0.5) / w;
+    col_cos[x] = static_cast<float>(std::cos(phi));
+    col_sin[x] = static_cast<float>(std::sin(phi));
+  }
   struct Row {
     std::vector<float> u, v, e;
   };
@@ -143,12 +205,19 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, b
           const double v0 = (y + double(j) / ky) / h, v1 = (y + double(j + 1) / ky) / h;
           const double sub_sr = latlong ? 2.0 * kPi / (double(w) * kx) * (std::cos(kPi * v0) - std::cos(kPi * v1))
                                         : ea_src_sr / (double(kx) * ky);
+          const float st = static_cast<float>(std::sin(kPi * 0.5 * (v0 + v1)));
+          const float ct = static_cast<float>(std::cos(kPi * 0.5 * (v0 + v1)));
           for (int x = 0; x < w; ++x) {
-            const Rgb L = map.texel(x, y);
-            const float e = static_cast<float>((double(L.r) + L.g + L.b) / 3.0 * sub_sr);
+            const float e = static_cast<float>(double(lum_at(x, y)) * sub_sr);
             for (int i = 0; i < kx; ++i, ++k) {
-              const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
-              const Vec3 d = map.to_world(latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv));
+              Vec3 md;
+              if (latlong && kx == 1) {
+                md = {st * col_cos[x], st * col_sin[x], ct};
+              } else {
+                const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
+                md = latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv);
+              }
+              const Vec3 d = map.to_world(md);
               mx[k] = d.x;
               my[k] = d.y;
               mz[k] = d.z;
@@ -166,11 +235,20 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, b
         const float px = r.u[k] * N_ - 0.5f, py = r.v[k] * N_ - 0.5f;
         const float fx = std::floor(px), fy = std::floor(py);
         const float tx = px - fx, ty = py - fy;
+        const int x0 = static_cast<int>(fx), y0t = static_cast<int>(fy);
+        const double e = r.e[k];
+        if (x0 >= 0 && y0t >= 0 && x0 + 1 < N_ && y0t + 1 < N_) {  // interior: no wrapping
+          splat[index(x0, y0t)] += e * ((1 - tx) * (1 - ty));
+          splat[index(x0 + 1, y0t)] += e * (tx * (1 - ty));
+          splat[index(x0, y0t + 1)] += e * ((1 - tx) * ty);
+          splat[index(x0 + 1, y0t + 1)] += e * (tx * ty);
+          continue;
+        }
         for (int j = 0; j < 2; ++j)
           for (int i = 0; i < 2; ++i) {
-            int xi = static_cast<int>(fx) + i, yi = static_cast<int>(fy) + j;
+            int xi = x0 + i, yi = y0t + j;
             if (!equal_area_wrap(N_, xi, yi)) continue;
-            splat[texel_index(xi, yi)] += double(r.e[k]) * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
+            splat[index(xi, yi)] += e * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
           }
       }
     }

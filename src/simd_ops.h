@@ -76,6 +76,16 @@ ENVPIS_INLINE V atan_unit(V x) {
   return select(big, p + V(0.78539816339744830962f), p);
 }
 
+/// atan2(y, x) in (-pi, pi] from atan_unit (scalar).
+ENVPIS_INLINE float atan2_fast(float y, float x) {
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  float a = hi > 0 ? atan_unit(lo / hi) : 0.0f;
+  if (ay > ax) a = 1.57079632679489661923f - a;
+  if (x < 0) a = 3.14159265358979323846f - a;
+  return std::copysign(a, y);
+}
+
 /// sin and cos of phi in [0, pi/2] (polynomials, ~1e-7 absolute).
 template <class V>
 ENVPIS_INLINE void sincos_quadrant(V phi, V& s, V& c) {
