@@ -125,7 +125,8 @@
   if (M.overhead) {
     root.appendChild(el("p", { html:
       `<b>Overhead</b> time(product) / time(mis) at ${M.overhead.spp} spp, ${M.overhead.threads} threads: ` +
-      `<b>${fmt(M.overhead.ratio, 3)}</b> (${fmt(M.overhead.product_seconds, 3)} s / ${fmt(M.overhead.mis_seconds, 3)} s).` }));
+      `<b>${fmt(M.overhead.ratio, 3)}</b> (${fmt(M.overhead.product_seconds, 3)} s / ${fmt(M.overhead.mis_seconds, 3)} s wall); ` +
+      `in process CPU time ${fmt(M.overhead.ratio_cpu, 3)} (less sensitive to other processes on the machine).` }));
   }
   if (M.equal_time) {
     root.appendChild(summaryTable(M.equal_time, `Equal time: ${fmt(M.equal_time.budget_seconds, 3)} s of sampling each`,
