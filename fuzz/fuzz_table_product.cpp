@@ -94,9 +94,11 @@ std::string describe(const char* what, Vec3 d) {
   std::abort();
 }
 
-void check(bool ok, const std::string& what) {
-  if (!ok) violated(what);
-}
+// The message is only built when the check fails (building it every time would halve the speed).
+#define CHECK(ok, what)          \
+  do {                           \
+    if (!(ok)) violated(what);   \
+  } while (0)
 
 // ENVPIS_FUZZ_VERBOSE=1: print what each input decodes to (for reading crash reproducers and seeds).
 bool verbose() {
@@ -144,26 +146,26 @@ void check_sampling(const Sampler& s, bool valid, const std::vector<Point2>& us,
   const std::string name(who);
   for (const Point2& u : us) {
     const DirectionSample ds = s.sample(u);
-    check(finite_nonneg(ds.pdf), name + ": sample() pdf not finite and >= 0: " + std::to_string(ds.pdf));
-    if (!valid) check(ds.pdf == 0.0f, name + ": sample() of an empty/invalid sampler has pdf " + std::to_string(ds.pdf));
+    CHECK(finite_nonneg(ds.pdf), name + ": sample() pdf not finite and >= 0: " + std::to_string(ds.pdf));
+    if (!valid) CHECK(ds.pdf == 0.0f, name + ": sample() of an empty/invalid sampler has pdf " + std::to_string(ds.pdf));
     if (ds.pdf > 0) {
       const Vec3 d = ds.direction;
-      check(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z),
+      CHECK(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z),
             describe((name + ": sampled direction not finite").c_str(), d));
-      check(std::fabs(length(d) - 1.0f) < 1e-4f, describe((name + ": sampled direction not unit").c_str(), d));
+      CHECK(std::fabs(length(d) - 1.0f) < 1e-4f, describe((name + ": sampled direction not unit").c_str(), d));
       const float p = s.pdf(d);
-      check(same_pdf(p, ds.pdf), describe((name + ": pdf(direction) " + std::to_string(p) +
+      CHECK(same_pdf(p, ds.pdf), describe((name + ": pdf(direction) " + std::to_string(p) +
                                            " != sample pdf " + std::to_string(ds.pdf) + " at").c_str(), d));
     }
   }
   for (const Vec3& d : dirs) {
     const float p = s.pdf(d);
-    check(finite_nonneg(p), describe((name + ": pdf not finite and >= 0 (" + std::to_string(p) + ") at").c_str(), d));
-    if (!valid) check(p == 0.0f, describe((name + ": pdf of an empty/invalid sampler not 0 at").c_str(), d));
+    CHECK(finite_nonneg(p), describe((name + ": pdf not finite and >= 0 (" + std::to_string(p) + ") at").c_str(), d));
+    if (!valid) CHECK(p == 0.0f, describe((name + ": pdf of an empty/invalid sampler not 0 at").c_str(), d));
   }
   for (const Vec3& d : kInvalid) {
     const float p = s.pdf(d);
-    check(p == 0.0f, describe((name + ": pdf of an invalid direction not 0 (" + std::to_string(p) + ") at").c_str(), d));
+    CHECK(p == 0.0f, describe((name + ": pdf of an invalid direction not 0 (" + std::to_string(p) + ") at").c_str(), d));
   }
 }
 
@@ -172,13 +174,13 @@ void check_distribution(int cells, ProbOf prob, bool nonzero, const char* who) {
   double sum = 0;
   for (int c = 0; c < cells; ++c) {
     const float p = prob(c);
-    check(finite_nonneg(p), std::string(who) + ": cell probability not finite and >= 0: " + std::to_string(p));
+    CHECK(finite_nonneg(p), std::string(who) + ": cell probability not finite and >= 0: " + std::to_string(p));
     sum += p;
   }
   if (nonzero)
-    check(std::fabs(sum - 1.0) < 1e-3, std::string(who) + ": cell probabilities sum to " + std::to_string(sum));
+    CHECK(std::fabs(sum - 1.0) < 1e-3, std::string(who) + ": cell probabilities sum to " + std::to_string(sum));
   else
-    check(sum == 0.0, std::string(who) + ": empty table has cell probabilities summing to " + std::to_string(sum));
+    CHECK(sum == 0.0, std::string(who) + ": empty table has cell probabilities summing to " + std::to_string(sum));
 }
 
 }  // namespace
@@ -253,7 +255,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const ImportanceTable table(map, to);
     check_distribution(table.cell_count(), [&](int c) { return table.cell_probability(c); }, !table.empty(),
                        "table");
-    check(std::isfinite(table.integral()) && table.integral() >= 0,
+    CHECK(std::isfinite(table.integral()) && table.integral() >= 0,
           "table integral not finite and >= 0: " + std::to_string(table.integral()));
     check_sampling(table, !table.empty(), us, dirs, "ImportanceTable");
 
@@ -272,8 +274,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (const Vec3& nn : normals) {
       const bool valid = sampler.prepare(nn, wo, proxy);
       const bool expect = !table.empty() && is_valid_direction(nn) && is_valid_direction(wo);
-      check(valid == sampler.valid(), "prepare() result differs from valid()");
-      check(valid == expect, describe(valid ? "prepare() valid although table empty or n/wo invalid, n"
+      CHECK(valid == sampler.valid(), "prepare() result differs from valid()");
+      CHECK(valid == expect, describe(valid ? "prepare() valid although table empty or n/wo invalid, n"
                                             : "prepare() invalid for a non-empty table and valid n, wo; n",
                                       nn) +
                                  describe(", wo", wo));
