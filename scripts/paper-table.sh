@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The BENCHMARKS.md comparison table: `envpis compare` of fig1 (direct lighting) under each of the eight
+# blender-data maps (/usr/share/blender/datafiles/studiolights/world/*.exr), strategies mis, mis-comp,
+# product and oracle at equal spp and at equal time, then scripts/paper_table.py aggregates the eight
+# metrics.json files into OUT/table.md (relMSE ratios per roughness, overhead, gap to the oracle, targets).
+# Each map's full report is in OUT/<map>/index.html.
+#
+# Sizes are modest so the whole table runs in about 15 minutes on 2 free cores (build not included):
+# 384x64 pixels, 64 spp, reference mis at 4096 spp with another seed (cached under ~/.cache/envpis),
+# oracle with 32x32 cells x 4 BSDF evaluations (4x cheaper than the renderer's 64x64, measured as good
+# per sphere on sunset). Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+OUT=${OUT:-out/paper-table}
+SPP=${SPP:-64}
+REF_SPP=${REF_SPP:-4096}
+WIDTH=${WIDTH:-384}
+HEIGHT=${HEIGHT:-64}
+ORACLE_RES=${ORACLE_RES:-32}
+MAPS=${MAPS:-/usr/share/blender/datafiles/studiolights/world/*.exr}
+if [ ! -x "$BUILD/apps/envpis/envpis" ] || [ "${REBUILD:-1}" = 1 ]; then
+  cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DENVPIS_BUILD_BENCH=OFF >/dev/null
+  cmake --build "$BUILD" -j"$(nproc)" --target envpis_cmd
+fi
+PY=/usr/bin/python3
+[ -x "$PY" ] || PY=python3
+start=$(date +%s)
+mkdir -p "$OUT"
+for map in $MAPS; do
+  name=$(basename "$map" .exr)
+  echo "paper-table: $name"
+  "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$map" --integrator direct \
+    --strategies mis,mis-comp,product,oracle --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
+    --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 4 --no-convergence \
+    --quiet --out "$OUT/$name" | sed 's/^/  /'
+done
+"$PY" scripts/paper_table.py "$OUT"/*/metrics.json > "$OUT/table.md"
+echo "paper-table: done in $(( $(date +%s) - start )) s; table in $OUT/table.md"

@@ -1,0 +1,185 @@
+#!/usr/bin/env python3
+"""Aggregates `envpis compare` runs of fig1 (one per environment map) into the markdown tables of
+BENCHMARKS.md: relMSE ratios per roughness at equal spp and at equal time, the overhead ratio, the gap
+to the oracle, and the issue's targets with met / not met.
+
+    python3 scripts/paper_table.py OUT/*/metrics.json > OUT/table.md
+
+Ratios > 1 mean product has less error (mis / product, mis-comp / product) or that the oracle has less
+error than product (product / oracle). "Pooled" is the geometric mean over the maps.
+"""
+import json
+import math
+import os
+import sys
+
+TARGET_MIS_OVER_PRODUCT = 1 / 0.55  # product relMSE <= 0.55 x mis at roughness 0.2 and 0.3, pooled
+TARGET_WORST_PRODUCT_OVER_MIS = 1.1  # no sphere of any map more than 1.1x worse than mis
+TARGET_OVERHEAD = 1.10  # time(product) / time(mis), goal 1.05
+
+
+def label(name):
+    return name[len("conductor-"):] if name.startswith("conductor-") else name
+
+
+def geomean(xs):
+    xs = [x for x in xs if x is not None and math.isfinite(x) and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
+
+
+def f(x, digits=2):
+    if x is None or not math.isfinite(x):
+        return "-"
+    return f"{x:.{digits}f}"
+
+
+def region_relmse(block, strategy):
+    for s in block["strategies"]:
+        if s["strategy"] == strategy:
+            return {r["name"]: r["relmse"] for r in s["regions"]}, s
+    return None, None
+
+
+def ratio_table(runs, block_key, num, den):
+    """{map: {region: relMSE(num) / relMSE(den)}} for the runs that have both strategies."""
+    out = {}
+    for name, m in runs:
+        block = m.get(block_key)
+        if not block:
+            continue
+        a, _ = region_relmse(block, num)
+        b, _ = region_relmse(block, den)
+        if a is None or b is None:
+            continue
+        out[name] = {r: (a[r] / b[r] if a.get(r) and b.get(r) else float("nan")) for r in a}
+    return out
+
+
+def efficiency_ratio(runs, num, den):
+    """Per-object efficiency ratio eff(den) / eff(num) at equal spp = relMSE(num) t(num) / (relMSE(den) t(den))."""
+    out = {}
+    for name, m in runs:
+        a, sa = region_relmse(m["equal_spp"], num)
+        b, sb = region_relmse(m["equal_spp"], den)
+        if a is None or b is None:
+            continue
+        out[name] = {r: a[r] * sa["seconds"] / (b[r] * sb["seconds"]) for r in a}
+    return out
+
+
+def md_rows(table, regions, maps):
+    lines = []
+    for mp in maps:
+        if mp in table:
+            lines.append(f"| {mp} | " + " | ".join(f(table[mp].get(r)) for r in regions) + " |")
+    pooled = [geomean([table[mp].get(r) for mp in maps if mp in table]) for r in regions]
+    lines.append("| **pooled** | " + " | ".join(f"**{f(p)}**" for p in pooled) + " |")
+    return lines, dict(zip(regions, pooled))
+
+
+def main(paths):
+    runs = []
+    for p in paths:
+        with open(p, encoding="utf-8") as fh:
+            m = json.load(fh)
+        runs.append((os.path.splitext(os.path.basename(m["environment"]))[0], m))
+    if not runs:
+        print("paper_table.py: no metrics.json given", file=sys.stderr)
+        return 2
+    runs.sort(key=lambda x: x[0])
+    maps = [n for n, _ in runs]
+    regions = [r["name"] for r in runs[0][1]["regions"]]
+    head = "| map | " + " | ".join(label(r) for r in regions) + " |"
+    sep = "|---|" + "---|" * len(regions)
+    m0 = runs[0][1]
+    out = []
+    et = m0.get("equal_time") or {}
+    out.append(f"Scene fig1 at {m0['width']}x{m0['height']}, {m0['integrator']} lighting, {m0['heuristic']} heuristic, "
+               f"{m0['threads']} threads; equal spp = {m0['equal_spp']['spp']} spp; equal time = each strategy gets "
+               f"the seconds mis took at {m0['equal_spp']['spp']} spp; reference: {m0['reference']['strategy']} at "
+               f"{m0['reference']['spp']} spp with another seed (its own noise adds ~{f(100 * geomean([m['reference']['relmse_floor'] / r['relmse'] for _, m in runs for r in m['equal_spp']['strategies'] if r['strategy'] == 'mis']), 1)}% "
+               f"of mis's relMSE); oracle: {m0['oracle_options']['resolution']}^2 cells x "
+               f"{m0['oracle_options']['directions']} BSDF evaluations. Columns: the GGX conductor spheres by roughness "
+               f"(alpha), then the diffuse and the glass (alpha 0.2) sphere. relMSE over each sphere's pixels.")
+    out.append("")
+    pooled = {}
+    sections = [
+        ("equal_spp", "mis", "product", "Equal spp: relMSE(mis) / relMSE(product) (> 1: product better)"),
+        ("equal_spp", "mis-comp", "product", "Equal spp: relMSE(mis-comp) / relMSE(product)"),
+        ("equal_time", "mis", "product", "Equal time: relMSE(mis) / relMSE(product)"),
+        ("equal_time", "mis-comp", "product", "Equal time: relMSE(mis-comp) / relMSE(product)"),
+        ("equal_spp", "product", "oracle", "Gap to the oracle at equal spp: relMSE(product) / relMSE(oracle) (> 1: room left)"),
+    ]
+    for key, num, den, title in sections:
+        t = ratio_table(runs, key, num, den)
+        if not t:
+            continue
+        out.append(f"**{title}**")
+        out.append("")
+        out.append(head)
+        out.append(sep)
+        lines, pooled[(key, num, den)] = md_rows(t, regions, maps)
+        out.extend(lines)
+        out.append("")
+
+    # Overhead
+    out.append("**Overhead: time(product) / time(mis) at equal spp** (sampling loop; wall = minimum of the timing "
+               "repeats; CPU = process CPU seconds, less sensitive to other load on the machine)")
+    out.append("")
+    out.append("| map | wall | CPU | mis s | product s |")
+    out.append("|---|---|---|---|---|")
+    walls, cpus = [], []
+    for name, m in runs:
+        o = m.get("overhead")
+        if not o:
+            continue
+        walls.append(o["ratio"])
+        cpus.append(o.get("ratio_cpu"))
+        out.append(f"| {name} | {f(o['ratio'], 3)} | {f(o.get('ratio_cpu'), 3)} | {f(o['mis_seconds'], 3)} | {f(o['product_seconds'], 3)} |")
+    ow, oc = geomean(walls), geomean(cpus)
+    out.append(f"| **pooled** | **{f(ow, 3)}** | **{f(oc, 3)}** | | |")
+    out.append("")
+
+    # Targets
+    eff_mis = efficiency_ratio(runs, "mis", "product")
+    eff_comp = efficiency_ratio(runs, "mis-comp", "product")
+    out.append("**Targets** (issue 4)")
+    out.append("")
+    out.append("| target | measured | verdict |")
+    out.append("|---|---|---|")
+    spp_mis = pooled.get(("equal_spp", "mis", "product"), {})
+    for r in ("conductor-0.2", "conductor-0.3"):
+        v = spp_mis.get(r, float("nan"))
+        ok = v >= TARGET_MIS_OVER_PRODUCT
+        out.append(f"| product relMSE <= 0.55x mis at alpha {label(r)}, pooled, equal spp | {f(1 / v if v else float('nan'))}x "
+                   f"(mis/product {f(v)}) | {'met' if ok else 'not met'}"
+                   f"{'' if ok else f' (by {f(100 * (1 / v / 0.55 - 1), 0)}%)'} |")
+    t = ratio_table(runs, "equal_spp", "product", "mis")
+    worst = max(((v, mp, r) for mp in t for r, v in t[mp].items() if math.isfinite(v)), default=(float("nan"), "", ""))
+    bad = sorted(((v, mp, r) for mp in t for r, v in t[mp].items() if math.isfinite(v) and v > TARGET_WORST_PRODUCT_OVER_MIS),
+                 reverse=True)
+    ok = not bad
+    detail = ", ".join(f"{mp} {label(r)} {f(v)}x" for v, mp, r in bad[:8]) + (" ..." if len(bad) > 8 else "")
+    out.append(f"| no sphere of any map more than 1.1x worse than mis (equal spp) | worst {f(worst[0])}x "
+               f"({worst[1]}, {label(worst[2])}); {len(bad)} of {sum(len(v) for v in t.values())} sphere-maps above 1.1x"
+               f"{': ' + detail if bad else ''} | {'met' if ok else 'not met'} |")
+    for rname in ("conductor-0.1", "conductor-0.2", "conductor-0.3", "conductor-0.5"):
+        a = geomean([eff_mis[mp][rname] for mp in eff_mis])
+        b = geomean([eff_comp[mp][rname] for mp in eff_comp])
+        wins_a = sum(1 for mp in eff_mis if eff_mis[mp][rname] > 1)
+        wins_b = sum(1 for mp in eff_comp if eff_comp[mp][rname] > 1)
+        ok = a > 1 and b > 1
+        out.append(f"| efficiency of product above mis and mis-comp at alpha {label(rname)} (pooled) | "
+                   f"eff(product)/eff(mis) {f(a)} ({wins_a}/{len(eff_mis)} maps), eff(product)/eff(mis-comp) {f(b)} "
+                   f"({wins_b}/{len(eff_comp)} maps) | {'met' if ok else 'not met'} |")
+    ok10, ok5 = ow <= TARGET_OVERHEAD, ow <= 1.05
+    out.append(f"| overhead <= 10% on fig1, direct (goal 5%) | {f(100 * (ow - 1), 1)}% wall, {f(100 * (oc - 1), 1)}% CPU "
+               f"(pooled) | {'met' if ok10 else 'not met'}{'' if ok10 else f' (by {f(100 * (ow - TARGET_OVERHEAD), 1)} points)'}"
+               f"; goal 5% {'met' if ok5 else 'not met'} |")
+    out.append("")
+    print("\n".join(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
