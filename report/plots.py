@@ -188,6 +188,8 @@ def ratio_bars(m, out, key, title):
     strategies = block["strategies"]
     prod = next((s for s in strategies if s["strategy"] == "product"), None)
     others = [s for s in strategies if s["strategy"] != "product"]
+    if key == "equal_time":  # the oracle is the limit, not a competitor at equal time (it gets ~1 spp)
+        others = [s for s in others if s["strategy"] != "oracle"]
     if prod is None or not others:
         return None
 

@@ -155,6 +155,16 @@
   }
   // ------------------------------------------------------------------ images with linked zoom
   const zoom = { x: W / 2, y: H / 2, side: Math.max(8, Math.round(Math.min(W, H) / 4)), pinned: false };
+  // Start on the object where mis has the most error (fig1: usually a mid-roughness sphere).
+  (function () {
+    const mis = M.equal_spp.strategies.find((s) => s.strategy === "mis") || M.equal_spp.strategies[0];
+    let best = null;
+    for (const r of M.regions || []) {
+      const e = (mis.regions.find((x) => x.id === r.id) || {}).relmse;
+      if (r.centroid && e !== null && e !== undefined && (!best || e > best.e)) best = { r: r, e: e };
+    }
+    if (best) { zoom.x = best.r.centroid[0]; zoom.y = best.r.centroid[1]; }
+  })();
   const markers = [], insets = [];
   function update() {
     const s = zoom.side;
@@ -214,7 +224,22 @@
       b.addEventListener("click", () => { zoom.side = side; update(); });
       c.appendChild(b);
     }
-    c.appendChild(el("span", { text: "  Hover over any image to move the region in all of them; click to pin it." }));
+    if (M.regions && M.regions.length && M.regions[0].bbox) {
+      c.appendChild(el("span", { text: "  Object: " }));
+      for (const r of M.regions) {
+        const b = el("button", { type: "button", text: regionLabel(r.name) });
+        b.addEventListener("click", () => {
+          zoom.x = r.centroid[0];
+          zoom.y = r.centroid[1];
+          zoom.side = Math.max(4, Math.min(Math.min(W, H), Math.max(r.bbox[2] - r.bbox[0], r.bbox[3] - r.bbox[1])));
+          zoom.pinned = true;
+          update();
+        });
+        c.appendChild(b);
+      }
+    }
+    c.appendChild(el("div", { class: "note", text: "Hover over any image to move the zoomed region in all of them; " +
+      "click to pin it (click again to follow the pointer)." }));
     return c;
   }
   function imageSection(block, title) {

@@ -146,6 +146,8 @@ struct Region {
   int id = -1;
   std::string name;
   std::size_t pixels = 0;
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // bounding box of the object's pixels, inclusive
+  double cx = 0, cy = 0;               // centroid (pixel centres)
 };
 
 struct ImageMetrics {
@@ -729,11 +731,33 @@ void run(const CompareArgs& a, const std::string& command_line) {
     m.nan_count = r.nonfinite_pixels;
     if (regions.empty()) {
       ref.object_id = r.object_id;
-      std::vector<std::size_t> count(scene.objects().size(), 0);
-      for (int id : r.object_id)
-        if (id >= 0 && static_cast<std::size_t>(id) < count.size()) ++count[static_cast<std::size_t>(id)];
-      for (std::size_t i = 0; i < count.size(); ++i)
-        if (count[i] > 0) regions.push_back({static_cast<int>(i), scene.objects()[i].name, count[i]});
+      std::vector<Region> all(scene.objects().size());
+      for (std::size_t i = 0; i < all.size(); ++i) {
+        all[i].id = static_cast<int>(i);
+        all[i].name = scene.objects()[i].name;
+        all[i].x0 = W;
+        all[i].y0 = H;
+        all[i].x1 = all[i].y1 = -1;
+      }
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const int id = r.object_id[static_cast<std::size_t>(y) * W + x];
+          if (id < 0 || static_cast<std::size_t>(id) >= all.size()) continue;
+          Region& g = all[static_cast<std::size_t>(id)];
+          ++g.pixels;
+          g.x0 = std::min(g.x0, x);
+          g.y0 = std::min(g.y0, y);
+          g.x1 = std::max(g.x1, x);
+          g.y1 = std::max(g.y1, y);
+          g.cx += x + 0.5;
+          g.cy += y + 0.5;
+        }
+      for (Region& g : all)
+        if (g.pixels > 0) {
+          g.cx /= double(g.pixels);
+          g.cy /= double(g.pixels);
+          regions.push_back(g);
+        }
     }
     progress.line("equal spp: %-8s %d spp  %.3f s (min of %zu)", to_string(s), spp, m.seconds, m.seconds_runs.size());
     eq_images.push_back(std::move(r));
@@ -882,7 +906,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
                     {"png", "images/reference.png"},
                     {"object_id_exr", "images/object-id.exr"}};
   json rj = json::array();
-  for (const auto& r : regions) rj.push_back({{"id", r.id}, {"name", r.name}, {"pixels", r.pixels}});
+  for (const auto& r : regions)
+    rj.push_back({{"id", r.id},
+                  {"name", r.name},
+                  {"pixels", r.pixels},
+                  {"bbox", {r.x0, r.y0, r.x1 + 1, r.y1 + 1}},
+                  {"centroid", {r.cx, r.cy}}});
   j["regions"] = rj;
   json es = json::array();
   for (const auto& m : eq_spp) es.push_back(measured_json(m, regions));
