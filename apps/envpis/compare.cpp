@@ -80,7 +80,7 @@ struct CompareArgs {
   std::string integrator = "direct";
   std::string heuristic = "power";
   std::string max_depth = "8";
-  std::string width = "384", height = "64";
+  std::string width = "0", height = "0";  // 0: half the scene camera's size
   std::string seed = "0";
   std::string threads = "0";
   std::string repeats = "3";
@@ -633,8 +633,17 @@ void run(const CompareArgs& a, const std::string& command_line) {
     }
     return load_scene_file(a.scene, env);
   }();
-  const int W = base.width > 0 ? base.width : scene.camera().width;
-  const int H = base.height > 0 ? base.height : scene.camera().height;
+  // Default size: half the scene's (a fast comparison; fig1: 384x64), keeping its aspect ratio.
+  const int W = base.width > 0 ? base.width
+                               : base.height > 0 ? std::max(1, static_cast<int>(std::lround(double(base.height) *
+                                                                                        scene.camera().width /
+                                                                                        scene.camera().height)))
+                                                 : std::max(1, scene.camera().width / 2);
+  const int H = base.height > 0 ? base.height
+                                : base.width > 0 ? std::max(1, static_cast<int>(std::lround(double(base.width) *
+                                                                                         scene.camera().height /
+                                                                                         scene.camera().width)))
+                                                 : std::max(1, scene.camera().height / 2);
   base.width = W;
   base.height = H;
   const int threads_used = base.threads > 0 ? base.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -1046,8 +1055,8 @@ const RegisterCommand reg{{"compare",
                              sub.add_option("--integrator", a->integrator, "direct or path")->type_name("I")->capture_default_str();
                              sub.add_option("--heuristic", a->heuristic, "MIS heuristic: power or balance")->type_name("H")->capture_default_str();
                              sub.add_option("--max-depth", a->max_depth, "path integrator: maximum bounces")->type_name("INT")->capture_default_str();
-                             sub.add_option("--width", a->width, "image width (0: the scene's)")->type_name("INT")->capture_default_str();
-                             sub.add_option("--height", a->height, "image height (0: the scene's)")->type_name("INT")->capture_default_str();
+                             sub.add_option("--width", a->width, "image width (0: from --height and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
+                             sub.add_option("--height", a->height, "image height (0: from --width and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--seed", a->seed, "random seed of the measured renders")->type_name("INT")->capture_default_str();
                              sub.add_option("--threads", a->threads, "worker threads (0: all)")->type_name("INT")->capture_default_str();
                              sub.add_option("--repeats", a->repeats, "timing repeats of each equal-spp render under 2 s (minimum kept)")
