@@ -148,7 +148,7 @@
   root.appendChild(ps);
 
   if (M.regions && M.regions.length) {
-    const sec = el("section", {}, [el("h2", { text: "Per object (fig1: per roughness)" })]);
+    const sec = el("section", {}, [el("h2", { text: M.scene === "fig1" ? "Per object (fig1: one sphere per roughness)" : "Per object" })]);
     sec.appendChild(regionTable(M.equal_spp, "relMSE per object at equal spp"));
     if (M.equal_time) sec.appendChild(regionTable(M.equal_time, "relMSE per object at equal time"));
     root.appendChild(sec);
