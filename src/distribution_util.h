@@ -51,6 +51,37 @@ inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u, floa
   return s;
 }
 
+/// The same running sums stored so that both searches of a sample read contiguous memory: first the
+/// h row ends (the marginal), then each row's other w - 1 entries. Same size as the row-major array.
+inline void store_split2d(const float* cdf, int w, int h, float* out) {
+  for (int y = 0; y < h; ++y) {
+    out[y] = cdf[y * w + w - 1];
+    for (int x = 0; x < w - 1; ++x) out[h + y * (w - 1) + x] = cdf[y * w + x];
+  }
+}
+
+/// sample_flat2d() for the split layout of store_split2d().
+inline Flat2DSample sample_split2d(const float* split, int w, int h, Point2 u) {
+  const float uy = clamp_unit(u.y), ux = clamp_unit(u.x);
+  Flat2DSample s;
+  s.y = static_cast<int>(std::min<long>(std::upper_bound(split, split + h, uy) - split, h - 1));
+  const float row_start = s.y > 0 ? split[s.y - 1] : 0.0f;
+  const float row_end = split[s.y];
+  const float row_mass = row_end - row_start;
+  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  const float target = row_start + ux * row_mass;
+  const float* row = split + h + static_cast<std::size_t>(s.y) * (w - 1);  // entries 0 .. w-2
+  s.x = static_cast<int>(std::upper_bound(row, row + (w - 1), target) - row);  // w - 1: the last column
+  if (s.x == w - 1 && !(row_end > target)) {  // rounding at the row's end: last column with mass
+    while (s.x > 0 && (s.x == w - 1 ? row_end : row[s.x]) <= row[s.x - 1]) --s.x;
+  }
+  const float c0 = s.x > 0 ? row[s.x - 1] : row_start;
+  const float c1 = s.x < w - 1 ? row[s.x] : row_end;
+  const float mass = c1 - c0;
+  s.ox = mass > 0 ? clamp_unit((target - c0) / mass) : 0.5f;
+  return s;
+}
+
 /// Mass of cell i from the running-sum array.
 inline float flat_mass(const float* cdf, int i) { return i > 0 ? cdf[i] - cdf[i - 1] : cdf[0]; }
 

@@ -308,19 +308,22 @@ void ImportanceTable::build_cells() {
   cell_sum_.assign(cells, 0.0f);
   cell_prob_.assign(cells, 0.0f);
   std::vector<double> sums(cells, 0.0);
-  tbb::parallel_for(0, cells, [&](int c) {
-    const float* f = &func_[c * per_cell];
-    float* cdf = &cdf_[c * per_cell];
-    double total_c = 0;
-    for (std::size_t i = 0; i < per_cell; ++i) total_c += f[i];
-    sums[c] = total_c;
-    if (total_c > 0) {
-      double run = 0;
-      for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = static_cast<float>((run += f[i]) / total_c);
-    } else {  // a zero cell (only with floor 0): uniform, never chosen because its probability is 0
-      for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = float(i + 1) / float(per_cell);
+  tbb::parallel_for(tbb::blocked_range<int>(0, cells), [&](const tbb::blocked_range<int>& range) {
+    std::vector<float> cdf(per_cell);  // row-major running sums, normalized to end at 1
+    for (int c = range.begin(); c < range.end(); ++c) {
+      const float* f = &func_[c * per_cell];
+      double total_c = 0;
+      for (std::size_t i = 0; i < per_cell; ++i) total_c += f[i];
+      sums[c] = total_c;
+      if (total_c > 0) {
+        double run = 0;
+        for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = static_cast<float>((run += f[i]) / total_c);
+      } else {  // a zero cell (only with floor 0): uniform, never chosen because its probability is 0
+        for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = float(i + 1) / float(per_cell);
+      }
+      cdf[per_cell - 1] = 1.0f;
+      detail::store_split2d(cdf.data(), F_, F_, &cdf_[c * per_cell]);
     }
-    cdf[per_cell - 1] = 1.0f;
   });
   double total = 0;
   for (double s : sums) total += s;
@@ -419,7 +422,7 @@ int ImportanceTable::cell_of_direction(Vec3 d) const {
 Point2 ImportanceTable::sample_in_cell(int c, Point2 u, float* pdf_in_cell) const {
   const std::size_t per_cell = static_cast<std::size_t>(F_) * F_;
   const float* cdf = &cdf_[c * per_cell];
-  const detail::Flat2DSample s = detail::sample_flat2d(cdf, F_, F_, u);
+  const detail::Flat2DSample s = detail::sample_split2d(cdf, F_, F_, u);
   const int cx = c % T_, cy = c / T_;
   if (pdf_in_cell) {
     const float f = func_[c * per_cell + static_cast<std::size_t>(s.y) * F_ + s.x];
