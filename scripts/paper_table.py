@@ -27,6 +27,14 @@ def geomean(xs):
     return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
 
 
+def median(xs):
+    xs = sorted(x for x in xs if x is not None and math.isfinite(x))
+    if not xs:
+        return float("nan")
+    n = len(xs)
+    return xs[n // 2] if n % 2 else 0.5 * (xs[n // 2 - 1] + xs[n // 2])
+
+
 def f(x, digits=2):
     if x is None or not math.isfinite(x):
         return "-"
@@ -73,7 +81,9 @@ def md_rows(table, regions, maps):
         if mp in table:
             lines.append(f"| {mp} | " + " | ".join(f(table[mp].get(r)) for r in regions) + " |")
     pooled = [geomean([table[mp].get(r) for mp in maps if mp in table]) for r in regions]
-    lines.append("| **pooled** | " + " | ".join(f"**{f(p)}**" for p in pooled) + " |")
+    medians = [median([table[mp].get(r) for mp in maps if mp in table]) for r in regions]
+    lines.append("| **pooled** (geometric mean) | " + " | ".join(f"**{f(p)}**" for p in pooled) + " |")
+    lines.append("| median | " + " | ".join(f(p) for p in medians) + " |")
     return lines, dict(zip(regions, pooled))
 
 
@@ -137,7 +147,7 @@ def main(paths):
         cpus.append(o.get("ratio_cpu"))
         out.append(f"| {name} | {f(o['ratio'], 3)} | {f(o.get('ratio_cpu'), 3)} | {f(o['mis_seconds'], 3)} | {f(o['product_seconds'], 3)} |")
     ow, oc = geomean(walls), geomean(cpus)
-    out.append(f"| **pooled** | **{f(ow, 3)}** | **{f(oc, 3)}** | | |")
+    out.append(f"| **pooled** (geometric mean) | **{f(ow, 3)}** | **{f(oc, 3)}** | | |")
     out.append("")
 
     # Targets
