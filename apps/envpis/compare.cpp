@@ -658,13 +658,25 @@ void run(const CompareArgs& a, const std::string& command_line) {
       it = tables.emplace(s, StrategyTables::build(scene.environment(), s, base.oracle, base.product)).first;
     return it->second;
   };
-  auto do_render = [&](Strategy s, int n, std::uint64_t sd) {
+  // A progress bar on a terminal for renders that take a while (the reference, the oracle).
+  const bool bar = !a.quiet && isatty(STDERR_FILENO);
+  auto do_render = [&](Strategy s, int n, std::uint64_t sd, const std::string& label) {
     RenderOptions o = base;
     o.strategy = s;
     o.spp = n;
     o.seed = sd;
     o.tables = &tables_for(s);
-    return envpis::render::render(scene, o);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (bar && !label.empty())
+      o.progress = [&label, t0](double f) {
+        if (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2)) return;
+        std::fprintf(stderr, "\r  %s: %3d%%", label.c_str(), static_cast<int>(f * 100 + 0.5));
+        std::fflush(stderr);
+      };
+    RenderResult r = envpis::render::render(scene, o);
+    if (bar && !label.empty() && std::chrono::steady_clock::now() - t0 >= std::chrono::seconds(2))
+      std::fprintf(stderr, "\r%*s\r", static_cast<int>(label.size()) + 10, "");
+    return r;
   };
 
   // 4. Reference (cached).
@@ -692,7 +704,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   } else {
     progress.line("reference: %s @ %d spp (seed %llu) ...", to_string(ref_strategy), ref_spp,
                   static_cast<unsigned long long>(ref_seed));
-    RenderResult rr = do_render(ref_strategy, ref_spp, ref_seed);
+    RenderResult rr = do_render(ref_strategy, ref_spp, ref_seed, "reference");
     Reference r;
     r.width = rr.width;
     r.height = rr.height;
@@ -726,17 +738,10 @@ void run(const CompareArgs& a, const std::string& command_line) {
     m.strategy = s;
     m.spp = spp;
     m.stem = std::string("spp-") + to_string(s);
-    RenderResult r = do_render(s, spp, seed);
+    RenderResult r = do_render(s, spp, seed, std::string("equal spp: ") + to_string(s));
     m.seconds_runs.push_back(r.seconds);
     m.seconds = r.seconds;
     m.cpu_seconds = r.cpu_seconds;
-    // Repeat only the fast renders: a timing under a couple of seconds is the noisy one.
-    for (int i = 1; i < repeats && r.seconds < 2.0; ++i) {
-      const RenderResult again = do_render(s, spp, seed);
-      m.seconds_runs.push_back(again.seconds);
-      m.seconds = std::min(m.seconds, again.seconds);
-      m.cpu_seconds = std::min(m.cpu_seconds, again.cpu_seconds);
-    }
     m.nan_count = r.nonfinite_pixels;
     if (regions.empty()) {
       ref.object_id = r.object_id;
@@ -768,10 +773,24 @@ void run(const CompareArgs& a, const std::string& command_line) {
           regions.push_back(g);
         }
     }
-    progress.line("equal spp: %-8s %d spp  %.3f s (min of %zu)", to_string(s), spp, m.seconds, m.seconds_runs.size());
+    progress.line("equal spp: %-8s %d spp  %.3f s", to_string(s), spp, m.seconds);
     eq_images.push_back(std::move(r));
     eq_spp.push_back(std::move(m));
   }
+  // Timing repeats, interleaved across strategies (so a change in the machine's load hits all of them),
+  // only for the fast renders: a timing under a couple of seconds is the noisy one. Images are
+  // deterministic, so only the times are kept; each strategy's time is its minimum.
+  for (int i = 1; i < repeats; ++i)
+    for (Measured& m : eq_spp) {
+      if (m.seconds_runs.front() >= 2.0) continue;
+      const RenderResult again = do_render(m.strategy, spp, seed, "");
+      m.seconds_runs.push_back(again.seconds);
+      m.seconds = std::min(m.seconds, again.seconds);
+      m.cpu_seconds = std::min(m.cpu_seconds, again.cpu_seconds);
+    }
+  if (repeats > 1)
+    for (const Measured& m : eq_spp)
+      progress.line("equal spp: %-8s %.3f s (min of %zu runs)", to_string(m.strategy), m.seconds, m.seconds_runs.size());
   for (std::size_t i = 0; i < eq_spp.size(); ++i)
     eq_spp[i].metrics = measure(eq_images[i].rgb, eq_images[i].variance, ref, regions);
 
@@ -804,7 +823,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
       const Strategy s = eq_spp[i].strategy;
       json series = json::array();
       for (int n : points) {
-        RenderResult r = do_render(s, n, seed);
+        RenderResult r = do_render(s, n, seed, std::string("convergence: ") + to_string(s) + " @ " + std::to_string(n));
         const ImageMetrics mm = measure(r.rgb, r.variance, ref, regions);
         series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.relmse}, {"regions", regions_json(regions, mm, false)}});
       }
@@ -824,7 +843,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if (equal_time || equal_time_auto) {
     if (equal_time_auto) {
       const Measured* m = find_eq(Strategy::Mis);
-      budget = (m ? m : &eq_spp.front())->seconds;
+      budget = (m ? m : &eq_spp.front())->seconds;  // mis's time, or the first strategy's without mis
     } else {
       budget = *equal_time;
     }
@@ -835,7 +854,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
       m.strategy = e.strategy;
       m.spp = n;
       m.stem = std::string("time-") + to_string(e.strategy);
-      RenderResult r = do_render(e.strategy, n, seed);
+      RenderResult r = do_render(e.strategy, n, seed, std::string("equal time: ") + to_string(e.strategy));
       m.seconds_runs.push_back(r.seconds);
       m.seconds = r.seconds;
       m.cpu_seconds = r.cpu_seconds;
@@ -986,8 +1005,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if (!plots_problem.empty()) {
     j["plots"] = nullptr;
     j["plots_unavailable"] = plots_problem;
-    std::fprintf(stderr, "envpis compare: warning: %s; images and metrics.json are written, the report has no plots\n",
-                 plots_problem.c_str());
+    if (!a.no_plots)
+      std::fprintf(stderr, "envpis compare: warning: %s; images and metrics.json are written, the report has no plots\n",
+                   plots_problem.c_str());
   }
   write_metrics();
 
