@@ -18,6 +18,12 @@ PACKAGES=(
   python3 python3-matplotlib python3-numpy chromium
 )
 
+# The report's browser test drives chromium with playwright-core from npm: Debian's node and npm unless
+# the machine already has a node (this workplace's images ship node 20 and npm 11 outside apt).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  PACKAGES+=(nodejs npm)
+fi
+
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
 
