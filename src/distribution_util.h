@@ -82,6 +82,28 @@ inline Flat2DSample sample_split2d(const float* split, int w, int h, Point2 u) {
   return s;
 }
 
+/// A w x h table stored as running sums inside each row (`within`, w * h entries) and running sums of
+/// the row totals (`rows`, h entries, the last being `total`): the row with u.y, the column with u.x.
+inline Flat2DSample sample_rows2d(const float* rows, const float* within, int w, int h, Point2 u, float total) {
+  const float uy = clamp_unit(u.y) * total, ux = clamp_unit(u.x);
+  Flat2DSample s;
+  s.y = static_cast<int>(std::min<long>(std::upper_bound(rows, rows + h, uy) - rows, h - 1));
+  const float row_start = s.y > 0 ? rows[s.y - 1] : 0.0f;
+  const float* row = within + static_cast<std::size_t>(s.y) * w;
+  const float row_mass = row[w - 1];
+  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  const float target = ux * row_mass;
+  s.x = static_cast<int>(std::upper_bound(row, row + w, target) - row);
+  if (s.x >= w) {  // rounding at the row's end: the last column with mass
+    s.x = w - 1;
+    while (s.x > 0 && row[s.x] <= row[s.x - 1]) --s.x;
+  }
+  const float c0 = s.x > 0 ? row[s.x - 1] : 0.0f;
+  const float mass = row[s.x] - c0;
+  s.ox = mass > 0 ? clamp_unit((target - c0) / mass) : 0.5f;
+  return s;
+}
+
 /// Mass of cell i from the running-sum array.
 inline float flat_mass(const float* cdf, int i) { return i > 0 ? cdf[i] - cdf[i - 1] : cdf[0]; }
 

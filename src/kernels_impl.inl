@@ -59,7 +59,7 @@ ENVPIS_INLINE void sphere_to_square_one(V dx, V dy, V dz, V& pu, V& pv) {
 /// max(0, t - b) where cos t = c.
 template <class V>
 ENVPIS_INLINE V closest_cos(V c, V cosb, V sinb) {
-  const V s = vsqrt(vmax(V(1.0f) - c * c, V(0.0f)));
+  const V s = vsqrt_fast(vmax(V(1.0f) - c * c, V(0.0f)));
   return select(c >= cosb, V(1.0f), c * cosb + s * sinb);
 }
 
@@ -70,8 +70,8 @@ ENVPIS_INLINE V closest_cos(V c, V cosb, V sinb) {
 template <class V>
 ENVPIS_INLINE V ggx_like(V c, V coef, V m) {
   const V cp = vmax(c, V(0.0f));
-  const V d = V(1.0f) + m * cp * cp;
-  return coef / (d * d);
+  const V d = V(1.0f) + m * cp * cp;  // >= a'^2 >= 1e-6
+  return coef * vrcp_fast(d * d);
 }
 
 /// LobeParams broadcast to V.
@@ -90,7 +90,7 @@ template <class V, bool kTransmission = true>
 ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
   // N and -N make supplementary angles with the axis: one sine serves both.
-  const V sn = vsqrt(vmax(V(1.0f) - cn * cn, V(0.0f)));
+  const V sn = vsqrt_fast(vmax(V(1.0f) - cn * cn, V(0.0f)));
   const V up = select(cn >= cb, V(1.0f), cn * cb + sn * sb);     // towards N
   const V cR = closest_cos(l.rx * ax + l.ry * ay + l.rz * az, cb, sb);
   V value = select(up > V(0.0f), l.kd * up + ggx_like(cR, l.cr, l.mr), V(0.0f));

@@ -16,6 +16,7 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
   kernels_ = options.simd ? &detail::kernels_best() : &detail::kernels_scalar();
   prob_.assign(table.padded_cell_count(), 0.0f);
   cdf_.assign(table.cell_count(), 0.0f);
+  row_cdf_.assign(table.top_resolution(), 0.0f);
 }
 
 bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
@@ -26,14 +27,13 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   prepared_ = prepare_proxy(proxy, n, wo, options_.proxy);
   float m = options_.env_mix;
   float* prob = prob_.data();
-  float* cdf = cdf_.data();
   float sum = 0;
   if (prepared_.valid()) {
     const detail::CellArrays arrays{table_->soa_axis_x(), table_->soa_axis_y(), table_->soa_axis_z(),
                                     table_->soa_cos(),    table_->soa_sin(),    table_->soa_prob(),
                                     table_->padded_cell_count()};
     static_cast<const detail::Kernels*>(kernels_)->product_weights(arrays, detail::to_lobe_params(prepared_), prob);
-    for (int c = 0; c < cells; ++c) cdf[c] = sum += prob[c];
+    sum = running_sums();
   }
   // Nothing the proxy can see: environment only. A sum below FLT_MIN (denormal lobe weights) counts as
   // nothing too: its reciprocal would overflow to inf and so would every pdf (found by fuzzing).
@@ -44,13 +44,11 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   if (m > 0.0f) {  // defensive mixture with the environment distribution
     const float* e = table_->soa_prob();
     const float a = m < 1.0f ? (1.0f - m) / sum : 0.0f;
-    float run = 0;
     for (int c = 0; c < cells; ++c) {
       // Not a * prob[c] when a == 0: the fallback after an infinite product weight would give 0 * inf = NaN.
       prob[c] = (a > 0.0f ? a * prob[c] : 0.0f) + m * e[c];
-      cdf[c] = run += prob[c];
     }
-    sum = run;
+    sum = running_sums();
   }
   if (!(sum > 0) || !std::isfinite(sum)) return false;
   // prob_ and cdf_ stay unnormalized: sampling scales u by the total, pdf() multiplies by its inverse.
@@ -60,16 +58,35 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   return true;
 }
 
+float ProductSampler::running_sums() {
+  // Row by row (rows are independent chains of T adds, which the CPU overlaps), then the row totals:
+  // a T x T table needs no running sum longer than T.
+  const int T = table_->top_resolution();
+  const float* prob = prob_.data();
+  float* cdf = cdf_.data();
+  float run = 0;
+  for (int r = 0; r < T; ++r) {
+    float acc = 0;
+    for (int k = 0; k < T; ++k) cdf[r * T + k] = acc += prob[r * T + k];
+    row_cdf_[r] = run += acc;
+  }
+  return run;
+}
+
 DirectionSample ProductSampler::sample(Point2 u) const {
   DirectionSample out;
   if (!valid_) return out;
   const int T = table_->top_resolution();
-  const detail::Flat2DSample s = detail::sample_flat2d(cdf_.data(), T, T, u, total_);
+  const detail::Flat2DSample s = detail::sample_rows2d(row_cdf_.data(), cdf_.data(), T, T, u, total_);
   const int c = s.y * T + s.x;
-  const Point2 p = table_->sample_in_cell(c, {s.ox, s.oy}, nullptr);
+  float pc;
+  bool interior;
+  const Point2 p = table_->sample_in_cell(c, {s.ox, s.oy}, &pc, &interior);
   out.direction = equal_area_square_to_sphere(p);
   out.cell = c;
-  out.pdf = pdf(out.direction);
+  // Far from texel edges the sampled texel is the one pdf() finds: its density directly (same
+  // arithmetic as pdf()); near an edge, pdf() of the direction, so the two always agree.
+  out.pdf = interior ? prob_[c] * inv_total_ * pc * float(T) * float(T) * kInv4Pi : pdf(out.direction);
   return out;
 }
 
@@ -78,7 +95,7 @@ float ProductSampler::pdf(Vec3 wi) const {
   const Point2 p = equal_area_sphere_to_square(wi);
   const int c = table_->cell_of(p);
   const float T = static_cast<float>(table_->top_resolution());
-  return prob_[c] * inv_total_ * table_->pdf_in_cell(c, p) * T * T * kInv4Pi;
+  return prob_[c] * inv_total_ * table_->pdf_in_cell(c, p) * T * T * kInv4Pi;  // as in sample()
 }
 
 }  // namespace envpis

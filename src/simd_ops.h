@@ -7,6 +7,9 @@
 #include <cmath>
 #include <cstddef>
 #include <experimental/simd>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #ifndef ENVPIS_INLINE
 #define ENVPIS_INLINE inline __attribute__((always_inline))
@@ -56,6 +59,46 @@ template <class A>
 ENVPIS_INLINE VF<A> vmax(VF<A> a, VF<A> b) { return stdx::max(a, b); }
 template <class A>
 ENVPIS_INLINE VF<A> vcopysign(VF<A> mag, VF<A> sgn) { return stdx::copysign(mag, sgn); }
+
+// Fast square root and reciprocal: the hardware estimate refined by one Newton step (relative error
+// about 1e-7 instead of 0.5 ulp), several times the throughput of vsqrtps / vdivps. Scalar: exact.
+ENVPIS_INLINE float vsqrt_fast(float x) { return std::sqrt(x); }
+ENVPIS_INLINE float vrcp_fast(float x) { return 1.0f / x; }
+template <class A>
+ENVPIS_INLINE VF<A> rsqrt_estimate(VF<A> x) {
+#if defined(__AVX__)
+  if constexpr (sizeof(VF<A>) == 32) return VF<A>(_mm256_rsqrt_ps(static_cast<__m256>(x)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (sizeof(VF<A>) == 16) return VF<A>(_mm_rsqrt_ps(static_cast<__m128>(x)));
+#endif
+  return VF<A>(1.0f) / stdx::sqrt(x);
+}
+template <class A>
+ENVPIS_INLINE VF<A> rcp_estimate(VF<A> x) {
+#if defined(__AVX__)
+  if constexpr (sizeof(VF<A>) == 32) return VF<A>(_mm256_rcp_ps(static_cast<__m256>(x)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (sizeof(VF<A>) == 16) return VF<A>(_mm_rcp_ps(static_cast<__m128>(x)));
+#endif
+  return VF<A>(1.0f) / x;
+}
+/// sqrt(x) for x >= 0 (0 for x below 1e-30).
+template <class A>
+ENVPIS_INLINE VF<A> vsqrt_fast(VF<A> x) {
+  const auto ok = x > VF<A>(1e-30f);
+  const VF<A> xs = select(ok, x, VF<A>(1.0f));
+  VF<A> r = rsqrt_estimate(xs);
+  r = r * (VF<A>(1.5f) - VF<A>(0.5f) * xs * r * r);
+  return select(ok, xs * r, VF<A>(0.0f));
+}
+/// 1 / x for x > 1e-30.
+template <class A>
+ENVPIS_INLINE VF<A> vrcp_fast(VF<A> x) {
+  const VF<A> r = rcp_estimate(x);
+  return r * (VF<A>(2.0f) - x * r);
+}
 
 template <class V>
 ENVPIS_INLINE V load_any(const float* p) {

@@ -85,8 +85,11 @@ class ImportanceTable {
 
   // ---- for ProductSampler (and users building their own top-level distributions) ----
   /// Samples the fine distribution of top cell c with u in [0,1)^2; returns the equal-area point and
-  /// sets *pdf_square to the density inside the cell (over the cell's area, the cell having area 1).
-  Point2 sample_in_cell(int c, Point2 u, float* pdf_in_cell) const;
+  /// sets *pdf_in_cell to the density inside the cell (over the cell's area, the cell having area 1).
+  /// *interior (if given) tells whether the point is far enough inside its texel (2% of a texel) that
+  /// the direction it maps to maps back into the same texel: then *pdf_in_cell equals
+  /// pdf_in_cell(c, equal_area_sphere_to_square(direction)) exactly, and callers can skip that.
+  Point2 sample_in_cell(int c, Point2 u, float* pdf_in_cell, bool* interior = nullptr) const;
   /// Density of the fine distribution of cell c at equal-area point p, normalized over the cell's area.
   float pdf_in_cell(int c, Point2 p) const;
   /// Structure-of-arrays cone and probability data, padded with zero cells to a multiple of 16.
