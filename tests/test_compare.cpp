@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <OpenImageIO/imageio.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -60,7 +61,7 @@ class CompareCommand : public ::testing::Test {
 };
 
 TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
-  const fs::path out = fs::temp_directory_path() / "envpis-test-compare-bad";
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-bad-" + std::to_string(::getpid()));
   const std::string o = " --out '" + out.string() + "'";
   const std::vector<std::pair<std::string, std::string>> cases{
       {"compare --spp 0" + o, "--spp"},
@@ -93,8 +94,9 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
 }
 
 TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
-  const fs::path out = fs::temp_directory_path() / "envpis-test-compare-run";
-  const fs::path cache = fs::temp_directory_path() / "envpis-test-compare-cache";
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-run-" + pid);
+  const fs::path cache = fs::temp_directory_path() / ("envpis-test-compare-cache-" + pid);
   std::error_code ec;
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
