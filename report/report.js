@@ -58,13 +58,14 @@
     if (note) sec.appendChild(el("p", { class: "note", text: note }));
     const byName = Object.fromEntries(block.strategies.map((s) => [s.strategy, s]));
     const mis = byName["mis"], prod = byName["product"];
-    const head = ["strategy", "spp", "seconds", "relMSE", "efficiency", "mis / this", "this / product", "mean", "NaN px"];
+    const head = ["strategy", "spp", "seconds", "relMSE", "\u00b1 s.e.", "efficiency", "mis / this", "this / product", "mean", "NaN px"];
     const t = el("table", {}, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
     const best = Math.min(...block.strategies.map((s) => s.relmse));
     for (const s of block.strategies) {
       t.appendChild(el("tr", {}, [
         el("td", { text: s.strategy }), el("td", { text: String(s.spp) }), el("td", { text: fmt(s.seconds, 3) }),
         el("td", { class: s.relmse === best ? "best" : "", text: fmt(s.relmse, 4) }),
+        el("td", { text: s.relmse_stderr ? (100 * s.relmse_stderr / s.relmse).toFixed(1) + "%" : "\u2013" }),
         el("td", { text: fmt(s.efficiency, 4) }),
         el("td", { text: mis ? fmt(ratio(mis.relmse, s.relmse), 3) : "\u2013" }),
         el("td", { text: prod ? fmt(ratio(s.relmse, prod.relmse), 3) : "\u2013" }),
@@ -120,7 +121,8 @@
   }
 
   root.appendChild(summaryTable(M.equal_spp, `Equal samples: ${M.equal_spp.spp} spp`,
-    "Seconds: wall time of the sampling loop, minimum over the timing repeats. Ratios above 1 in " +
+    "Seconds: wall time of the sampling loop, minimum over the timing repeats. \u00b1 s.e.: standard error of " +
+    "relMSE from the spread of its per-pixel terms (rare fireflies that did not occur are not in it). Ratios above 1 in " +
     "\u201cmis / this\u201d mean less error than mis."));
   if (M.overhead) {
     root.appendChild(el("p", { html:

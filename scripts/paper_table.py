@@ -48,6 +48,29 @@ def region_relmse(block, strategy):
     return None, None
 
 
+def region_relerr(block, strategy):
+    """Relative standard error of each region's relMSE (from the spread of its per-pixel terms)."""
+    for s in block["strategies"]:
+        if s["strategy"] == strategy:
+            return {r["name"]: (r.get("relmse_stderr") or float("nan")) / r["relmse"] if r.get("relmse") else float("nan")
+                    for r in s["regions"]}
+    return None
+
+
+def ratio_relerr(runs, block_key, num, den):
+    """{map: {region: relative standard error of relMSE(num) / relMSE(den)}} (errors taken independent)."""
+    out = {}
+    for name, m in runs:
+        block = m.get(block_key)
+        if not block:
+            continue
+        a, b = region_relerr(block, num), region_relerr(block, den)
+        if a is None or b is None:
+            continue
+        out[name] = {r: math.sqrt(a[r] ** 2 + b[r] ** 2) for r in a}
+    return out
+
+
 def ratio_table(runs, block_key, num, den):
     """{map: {region: relMSE(num) / relMSE(den)}} for the runs that have both strategies."""
     out = {}
@@ -75,7 +98,7 @@ def efficiency_ratio(runs, num, den):
     return out
 
 
-def md_rows(table, regions, maps):
+def md_rows(table, regions, maps, relerr=None):
     lines = []
     for mp in maps:
         if mp in table:
@@ -84,6 +107,15 @@ def md_rows(table, regions, maps):
     medians = [median([table[mp].get(r) for mp in maps if mp in table]) for r in regions]
     lines.append("| **pooled** (geometric mean) | " + " | ".join(f"**{f(p)}**" for p in pooled) + " |")
     lines.append("| median | " + " | ".join(f(p) for p in medians) + " |")
+    if relerr:
+        # 1 standard error of the pooled value: the log of a geometric mean of k ratios has
+        # s.e. sqrt(sum of squared relative errors) / k.
+        cells = []
+        for r in regions:
+            errs = [relerr[mp][r] for mp in maps if mp in relerr and math.isfinite(relerr[mp].get(r, float("nan")))]
+            cells.append(f"{100 * math.sqrt(sum(e * e for e in errs)) / len(errs):.0f}% / {100 * median(errs):.0f}%"
+                         if errs else "-")
+        lines.append("| s.e. pooled / per map (median) | " + " | ".join(cells) + " |")
     return lines, dict(zip(regions, pooled))
 
 
@@ -128,7 +160,7 @@ def main(paths):
         out.append("")
         out.append(head)
         out.append(sep)
-        lines, pooled[(key, num, den)] = md_rows(t, regions, maps)
+        lines, pooled[(key, num, den)] = md_rows(t, regions, maps, ratio_relerr(runs, key, num, den))
         out.extend(lines)
         out.append("")
 
@@ -165,11 +197,15 @@ def main(paths):
                    f"(mis/product {f(v)}) | {'met' if ok else 'not met'}"
                    f"{'' if ok else f' (by {f(100 * (1 / v / 0.55 - 1), 0)}%)'} |")
     t = ratio_table(runs, "equal_spp", "product", "mis")
+    te = ratio_relerr(runs, "equal_spp", "product", "mis")
     worst = max(((v, mp, r) for mp in t for r, v in t[mp].items() if math.isfinite(v)), default=(float("nan"), "", ""))
     bad = sorted(((v, mp, r) for mp in t for r, v in t[mp].items() if math.isfinite(v) and v > TARGET_WORST_PRODUCT_OVER_MIS),
                  reverse=True)
     ok = not bad
-    detail = ", ".join(f"{mp} {label(r)} {f(v)}x" for v, mp, r in bad[:8]) + (" ..." if len(bad) > 8 else "")
+    # above 1.1 by more than two standard errors of the ratio (for the noise of one seed)
+    sig = [(v, mp, r) for v, mp, r in bad if te.get(mp) and v / (1 + 2 * te[mp][r]) > TARGET_WORST_PRODUCT_OVER_MIS]
+    detail = ", ".join(f"{mp} {label(r)} {f(v)}x" for v, mp, r in bad[:10]) + (" ..." if len(bad) > 10 else "")
+    detail += f"; {len(sig)} of them by more than 2 s.e." if te else ""
     out.append(f"| no sphere of any map more than 1.1x worse than mis (equal spp) | worst {f(worst[0])}x "
                f"({worst[1]}, {label(worst[2])}); {len(bad)} of {sum(len(v) for v in t.values())} sphere-maps above 1.1x"
                f"{': ' + detail if bad else ''} | {'met' if ok else 'not met'} |")

@@ -152,8 +152,10 @@ struct Region {
 
 struct ImageMetrics {
   double relmse = 0;
+  double relmse_stderr = 0;  // standard error of relmse from the spread of the per-pixel terms
   double mean = 0;
   std::vector<double> region_relmse;  // indexed like the region list
+  std::vector<double> region_stderr;
   std::vector<double> region_mean;
   std::vector<double> region_z;       // (mean - ref mean) / sqrt(var + ref var), NaN when undefined
   std::vector<float> per_pixel;       // mean over channels of the relMSE term
@@ -175,11 +177,11 @@ ImageMetrics measure(const std::vector<float>& rgb, const std::vector<float>& va
   const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
   m.per_pixel.assign(npix, 0.0f);
   const std::size_t nr = regions.size();
-  std::vector<double> rsum(nr, 0), rmean(nr, 0), rvar(nr, 0), refmean(nr, 0), refvar(nr, 0);
+  std::vector<double> rsum(nr, 0), rsum2(nr, 0), rmean(nr, 0), rvar(nr, 0), refmean(nr, 0), refvar(nr, 0);
   std::vector<std::size_t> rcount(nr, 0);
   std::map<int, std::size_t> region_index;
   for (std::size_t i = 0; i < nr; ++i) region_index[regions[i].id] = i;
-  double total = 0, sum = 0;
+  double total = 0, total2 = 0, sum = 0;
   for (std::size_t p = 0; p < npix; ++p) {
     double e = 0, avg = 0, ravg = 0;
     for (int c = 0; c < 3; ++c) {
@@ -191,11 +193,13 @@ ImageMetrics measure(const std::vector<float>& rgb, const std::vector<float>& va
     e /= 3;
     m.per_pixel[p] = static_cast<float>(e);
     total += e;
+    total2 += e * e;
     sum += avg / 3;
     auto it = region_index.find(ref.object_id[p]);
     if (it != region_index.end()) {
       const std::size_t r = it->second;
       rsum[r] += e;
+      rsum2[r] += e * e;
       rcount[r] += 1;
       rmean[r] += avg / 3;
       rvar[r] += variance[p];
@@ -203,17 +207,24 @@ ImageMetrics measure(const std::vector<float>& rgb, const std::vector<float>& va
       refvar[r] += ref.variance[p];
     }
   }
+  // Standard error of a mean of n independent per-pixel terms: sqrt(sample variance / n).
+  auto stderr_of = [](double s1, double s2, double n) {
+    return n > 1 ? std::sqrt(std::max(0.0, (s2 - s1 * s1 / n) / (n - 1)) / n) : std::nan("");
+  };
   m.relmse = total / double(npix);
+  m.relmse_stderr = stderr_of(total, total2, double(npix));
   m.mean = sum / double(npix);
   for (std::size_t r = 0; r < nr; ++r) {
     const double n = double(rcount[r]);
     if (n == 0) {
       m.region_relmse.push_back(std::nan(""));
+      m.region_stderr.push_back(std::nan(""));
       m.region_mean.push_back(std::nan(""));
       m.region_z.push_back(std::nan(""));
       continue;
     }
     m.region_relmse.push_back(rsum[r] / n);
+    m.region_stderr.push_back(stderr_of(rsum[r], rsum2[r], n));
     m.region_mean.push_back(rmean[r] / n);
     const double var = (rvar[r] + refvar[r]) / (n * n);
     m.region_z.push_back(var > 0 ? (rmean[r] - refmean[r]) / n / std::sqrt(var) : std::nan(""));
@@ -511,6 +522,7 @@ json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, boo
     r["id"] = regions[i].id;
     r["name"] = regions[i].name;
     r["relmse"] = std::isfinite(m.region_relmse[i]) ? json(m.region_relmse[i]) : json(nullptr);
+    r["relmse_stderr"] = std::isfinite(m.region_stderr[i]) ? json(m.region_stderr[i]) : json(nullptr);
     r["mean"] = std::isfinite(m.region_mean[i]) ? json(m.region_mean[i]) : json(nullptr);
     if (with_z) r["z"] = std::isfinite(m.region_z[i]) ? json(m.region_z[i]) : json(nullptr);
     arr.push_back(r);
@@ -526,6 +538,7 @@ json measured_json(const Measured& x, const std::vector<Region>& regions) {
   j["seconds_runs"] = x.seconds_runs;
   j["cpu_seconds"] = x.cpu_seconds;
   j["relmse"] = x.metrics.relmse;
+  j["relmse_stderr"] = x.metrics.relmse_stderr;
   j["efficiency"] = x.metrics.relmse > 0 && x.seconds > 0 ? json(1.0 / (x.metrics.relmse * x.seconds)) : json(nullptr);
   j["mean"] = x.metrics.mean;
   j["nan_count"] = x.nan_count;
