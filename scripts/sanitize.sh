@@ -2,7 +2,7 @@
 # Sanitizer runs (a CI step, after scripts/test.sh), each in its own build directory, with GCC (the
 # project's compiler; the fuzzers in scripts/fuzz.sh are the clang builds):
 #
-#   asan  build-asan: library, renderer and tests with AddressSanitizer + UndefinedBehaviorSanitizer
+#   asan  build-asan: library, renderer, envpis command and tests with AddressSanitizer + UBSan
 #         (-O1 -g, -fno-sanitize-recover=undefined: the first UB report fails the test; plus
 #         float-cast-overflow, which GCC leaves out of "undefined" and clang does not), then
 #         `ctest -L unit` (every test but the slow `sweep` label), minus ASAN_EXCLUDE below.
@@ -45,8 +45,8 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0}
 export TSAN_OPTIONS=${TSAN_OPTIONS:-suppressions=$ROOT/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1:history_size=4}
 
-configure() {  # configure <dir> <sanitizer flags>
-  local dir=$1 flags=$2 cxx
+configure() {  # configure <dir> <sanitizer flags> <build the envpis command: ON|OFF>
+  local dir=$1 flags=$2 apps=$3 cxx
   cxx=$(command -v "$CXX_BIN")
   # A build directory configured with another compiler cannot be switched: start it afresh.
   if [ -f "$dir/CMakeCache.txt" ] && ! grep -qx "CMAKE_CXX_COMPILER:[A-Z]*=$cxx" "$dir/CMakeCache.txt"; then
@@ -56,13 +56,14 @@ configure() {  # configure <dir> <sanitizer flags>
   cmake -S . -B "$dir" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Debug \
     -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_CXX_FLAGS="$flags -fno-omit-frame-pointer" \
     -DCMAKE_EXE_LINKER_FLAGS="$flags" -DCMAKE_SHARED_LINKER_FLAGS="$flags" \
-    -DENVPIS_BUILD_TESTS=ON -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS=OFF -DENVPIS_BUILD_FUZZ=OFF >/dev/null
+    -DENVPIS_BUILD_TESTS=ON -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS="$apps" -DENVPIS_BUILD_FUZZ=OFF >/dev/null
 }
 
 run_asan() {
   local t0
   t0=$(now)
-  configure "$ASAN_BUILD" "-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=undefined,float-cast-overflow"
+  # With the envpis command: its tests feed it bad files and options, which ASan should watch too.
+  configure "$ASAN_BUILD" "-fsanitize=address,undefined,float-cast-overflow -fno-sanitize-recover=undefined,float-cast-overflow" ON
   cmake --build "$ASAN_BUILD" -j"$JOBS"
   local t1
   t1=$(now)
@@ -98,7 +99,7 @@ run_tsan() {
   if ! printf '%s\n' "${targets[@]}" | grep -qx test_render; then
     log "tsan: tests/render has no determinism test yet: running the library's Thread tests only"
   fi
-  configure "$TSAN_BUILD" "-fsanitize=thread"
+  configure "$TSAN_BUILD" "-fsanitize=thread" OFF
   cmake --build "$TSAN_BUILD" -j"$JOBS" --target "${targets[@]}"
   local t1
   t1=$(now)
