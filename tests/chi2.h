@@ -41,6 +41,14 @@ struct Chi2Options {
   std::uint64_t seed = 1;
 };
 
+/// Largest divisor of n that is <= cap: a bin grid aligned with a table of n x n texels, so that the
+/// midpoint integration of a pdf that is constant on each texel is exact.
+inline int aligned_bins(int n, int cap = 64) {
+  for (int b = cap; b > 1; --b)
+    if (n % b == 0) return b;
+  return 1;
+}
+
 /// sample(u1, u2) returns a direction, or nullopt for a failed draw. pdf(direction) is per solid angle.
 inline Chi2Result chi2_test(const std::function<std::optional<Vec3>(float, float)>& sample,
                             const std::function<double(Vec3)>& pdf, const Chi2Options& opt = {}) {

@@ -12,14 +12,6 @@ using namespace envpis::test;
 
 namespace {
 
-/// Largest divisor of n that is <= cap: a chi-square bin grid aligned with the table's texels, so the
-/// midpoint integration of the piecewise-constant pdf is exact.
-int aligned_bins(int n, int cap = 64) {
-  for (int b = cap; b > 1; --b)
-    if (n % b == 0) return b;
-  return 1;
-}
-
 Chi2Result env_chi2(const ImportanceTable& table, std::uint64_t seed, int tests = 1, std::size_t samples = 300000) {
   Chi2Options opt;
   opt.bins = aligned_bins(table.fine_resolution());

@@ -23,12 +23,6 @@ using namespace envpis::test;
 
 namespace {
 
-int aligned_bins(int n, int cap = 64) {
-  for (int b = cap; b > 1; --b)
-    if (n % b == 0) return b;
-  return 1;
-}
-
 struct Config {
   Vec3 n, wo;
   BsdfProxy proxy;
