@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <new>
 #include <system_error>
 
 #include "envpis/equal_area.h"
@@ -76,10 +77,15 @@ EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMa
   const std::size_t texels = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
   if (texels > kMaxTexels) fail(path, "the image is too large (" + std::to_string(spec.width) + "x" +
                                           std::to_string(spec.height) + ")");
-  const int nc = spec.nchannels;
-  std::vector<float> raw(texels * nc);
-  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
-    fail(path, "could not read the pixels (corrupt or truncated?): " + first_line(in->geterror()));
+  const int nc = std::min(spec.nchannels, 3);  // only the first three channels are used: read no more
+  std::vector<float> raw;
+  try {
+    raw.resize(texels * nc);
+    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
+      fail(path, "could not read the pixels (corrupt or truncated?): " + first_line(in->geterror()));
+  } catch (const std::bad_alloc&) {
+    fail(path, "not enough memory for " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels");
+  }
   in->close();
 
   std::vector<float> rgb(texels * 3);
