@@ -104,7 +104,4 @@ inline Flat2DSample sample_rows2d(const float* rows, const float* within, int w,
   return s;
 }
 
-/// Mass of cell i from the running-sum array.
-inline float flat_mass(const float* cdf, int i) { return i > 0 ? cdf[i] - cdf[i - 1] : cdf[0]; }
-
 }  // namespace envpis::detail
