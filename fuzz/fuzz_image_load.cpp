@@ -9,11 +9,10 @@
 // and >= 0 in every direction. Any other exception, a crash, a sanitizer report, a leak or a hang is a
 // finding.
 //
-// One deliberate difference from a plain load(): OpenImageIO's "try_all_readers" is turned off, so a
-// file is only parsed by the reader its extension names (OpenEXR, Radiance HDR, PNG, TIFF, ...). With
-// the default (on), every input that the named reader rejects is handed to all 28 readers of Debian's
-// OpenImageIO (DICOM, FFmpeg, WebP, RAW, ...): third-party code without coverage feedback that slows
-// fuzzing to a few inputs per second and reports that code's own memory hogs (see fuzz/README.md).
+// load() picks one reader (by the content for OpenEXR, Radiance HDR, PFM, TIFF and PNG, else by the
+// extension) and never uses OpenImageIO's fallback of offering a file to all of its readers. The
+// "try_all_readers" attribute is turned off here as well, so that no other path through OpenImageIO
+// reaches those third-party readers (DICOM, FFmpeg, WebP, RAW, ...; see fuzz/README.md).
 #include <unistd.h>
 
 #include <OpenImageIO/imageio.h>

@@ -3,8 +3,12 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <new>
 #include <system_error>
@@ -24,7 +28,56 @@ constexpr std::size_t kMaxTexels = std::size_t(1) << 28;  // 268M texels, 3.2 GB
 std::string first_line(std::string s) {
   const auto nl = s.find('\n');
   if (nl != std::string::npos) s.resize(nl);
-  return s.empty() ? std::string("unknown error") : s;
+  return s.empty() ? std::string("no detail from OpenImageIO") : s;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// The reader for the formats environment maps come in, recognized by their first bytes.
+std::string format_from_content(const unsigned char* b, std::size_t n) {
+  if (n >= 4 && b[0] == 0x76 && b[1] == 0x2f && b[2] == 0x31 && b[3] == 0x01) return "openexr";
+  if (n >= 2 && b[0] == '#' && b[1] == '?') return "hdr";  // #?RADIANCE, #?RGBE
+  if (n >= 3 && b[0] == 'P' && (b[1] == 'F' || b[1] == 'f') && std::isspace(b[2])) return "pnm";  // PFM
+  if (n >= 8 && std::memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0) return "png";
+  if (n >= 4 && (std::memcmp(b, "II*\0", 4) == 0 || std::memcmp(b, "MM\0*", 4) == 0)) return "tiff";
+  return {};
+}
+
+// OpenImageIO's reader for a file extension (without the dot), from its "extension_list" attribute
+// ("openexr:exr,sxr,mxr;hdr:hdr,rgbe;..."); empty when none.
+std::string format_from_extension(const std::string& ext) {
+  if (ext.empty()) return {};
+  const std::string list = OIIO::get_string_attribute("extension_list");
+  std::size_t pos = 0;
+  while (pos < list.size()) {
+    std::size_t end = list.find(';', pos);
+    if (end == std::string::npos) end = list.size();
+    const std::string entry = list.substr(pos, end - pos);
+    const std::size_t colon = entry.find(':');
+    if (colon != std::string::npos) {
+      std::size_t p = colon + 1;
+      while (p <= entry.size()) {
+        std::size_t q = entry.find(',', p);
+        if (q == std::string::npos) q = entry.size();
+        if (entry.compare(p, q - p, ext) == 0) return entry.substr(0, colon);
+        p = q + 1;
+      }
+    }
+    pos = end + 1;
+  }
+  return {};
+}
+
+const char* format_display_name(const std::string& format) {
+  if (format == "openexr") return "OpenEXR";
+  if (format == "hdr") return "Radiance HDR";
+  if (format == "pnm") return "PFM";
+  if (format == "png") return "PNG";
+  if (format == "tiff") return "TIFF";
+  return nullptr;
 }
 }  // namespace
 
@@ -63,12 +116,43 @@ Vec3 latlong_to_direction(Point2 uv) {
 EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMapOptions& options) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) fail(path, "no such file");
+  if (ec && ec != std::errc::no_such_file_or_directory) fail(path, ec.message());
+  if (!std::filesystem::exists(status)) fail(path, "no such file");
   if (std::filesystem::is_directory(status)) fail(path, "is a directory, not an image file");
+  // A FIFO or a device would block or never end: only regular files are read.
+  if (!std::filesystem::is_regular_file(status)) fail(path, "is not a regular file");
   if (std::filesystem::file_size(path, ec) == 0 && !ec) fail(path, "the file is empty (0 bytes)");
 
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) fail(path, first_line(OIIO::geterror()));
+  unsigned char head[16] = {};
+  std::size_t head_bytes = 0;
+  {
+    errno = 0;
+    std::ifstream f(path, std::ios::binary);
+    if (!f) fail(path, std::string("cannot open: ") + (errno ? std::strerror(errno) : "unknown reason"));
+    f.read(reinterpret_cast<char*>(head), sizeof head);
+    head_bytes = static_cast<std::size_t>(f.gcount());
+  }
+
+  // The reader: the content's for the usual HDR formats, else the extension's. Never OpenImageIO's
+  // fallback that offers a file to every reader it has (third-party decoders that may take a junk
+  // file for a huge image).
+  std::string ext = lower(std::filesystem::path(path).extension().string());
+  if (!ext.empty()) ext.erase(0, 1);
+  const std::string by_content = format_from_content(head, head_bytes);
+  const std::string by_extension = format_from_extension(ext);
+  const std::string format = !by_content.empty() ? by_content : by_extension;
+  if (format.empty())
+    fail(path, ext.empty() ? "unknown image format (no file extension, and the content is not OpenEXR, "
+                             "Radiance HDR, PFM, TIFF or PNG)"
+                           : "unknown image format (no reader for the extension '." + ext +
+                                 "', and the content is not OpenEXR, Radiance HDR, PFM, TIFF or PNG)");
+  auto in = OIIO::ImageInput::create(format);
+  if (!in) fail(path, "no " + format + " reader in this OpenImageIO: " + first_line(OIIO::geterror()));
+  OIIO::ImageSpec opened;
+  if (!in->open(path, opened)) {
+    const char* name = format_display_name(format);
+    fail(path, std::string(name ? name : format.c_str()) + " reader: " + first_line(in->geterror()));
+  }
   const OIIO::ImageSpec spec = in->spec();
   if (spec.deep) fail(path, "deep images are not supported");
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
@@ -97,6 +181,8 @@ EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMa
   }
   EnvironmentMap map = from_pixels(spec.width, spec.height, std::move(rgb), options);
   map.path_ = path;
+  map.report_.format = format;
+  map.report_.extension_format = by_extension;
   return map;
 }
 
@@ -124,6 +210,7 @@ void EnvironmentMap::finish(const EnvironmentMapOptions& options) {
   scale_ = options.scale;
   rotation_ = options.rotation;
   inverse_rotation_ = rotation_.transposed();
+  max_radiance_ = 0;
   for (float& v : pixels_) {
     if (std::isnan(v)) {
       ++report_.nan_texels;
@@ -136,7 +223,27 @@ void EnvironmentMap::finish(const EnvironmentMapOptions& options) {
       v = 0;
     }
     v = std::min(v * scale_, kMaxRadiance);  // also catches a huge texel * scale overflowing to inf
+    max_radiance_ = std::max(max_radiance_, v);
   }
+}
+
+std::vector<std::string> EnvironmentMap::warnings() const {
+  std::vector<std::string> w;
+  const std::string name = path_.empty() ? std::string("the environment map") : "'" + path_ + "'";
+  if (report_.repaired() > 0)
+    w.push_back(name + ": " + std::to_string(report_.repaired()) + " texel values were invalid and set to 0 (" +
+                std::to_string(report_.nan_texels) + " NaN, " + std::to_string(report_.inf_texels) +
+                " infinite, " + std::to_string(report_.negative_texels) + " negative)");
+  if (!report_.format.empty() && !report_.extension_format.empty() && report_.format != report_.extension_format) {
+    const char* is = format_display_name(report_.format);
+    const std::string ext = lower(std::filesystem::path(path_).extension().string());
+    w.push_back(name + " contains " + (is ? is : report_.format.c_str()) + " data despite its '" + ext +
+                "' extension: read as " + (is ? is : report_.format.c_str()));
+  }
+  if (layout_ == MapLayout::LatLong && width_ != 2 * height_)
+    w.push_back(name + " is read as lat-long but is " + std::to_string(width_) + "x" + std::to_string(height_) +
+                ", not 2:1");
+  return w;
 }
 
 Rgb EnvironmentMap::bilinear_latlong(float u, float v) const {

@@ -76,7 +76,7 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --oracle-dirs 3" + o, "square"},
       {"compare --width -5" + o, "--width"},
       {"compare --seed 1 --ref-seed 1" + o, "--ref-seed"},
-      {"compare --env /nonexistent/map.exr" + o, "does not exist"},
+      {"compare --env /nonexistent/map.exr" + o, "cannot load environment map '/nonexistent/map.exr': no such file"},
       {"compare --scene nosuchscene" + o, "unknown scene"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},

@@ -1,6 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <OpenImageIO/imageio.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <filesystem>
 #include <fstream>
@@ -115,6 +120,79 @@ TEST(EnvironmentMap, BadFilesGiveClearErrors) {
     e = load_error(cut);
     EXPECT_NE(e.find("cut"), std::string::npos) << ext << ": " << (e.empty() ? "loaded without error" : e);
   }
+  fs::remove_all(dir);
+}
+
+// The reader follows the content for the usual HDR formats (a wrong extension is harmless and
+// reported), the extension otherwise; non-regular files, unknown formats and unreadable paths fail
+// cleanly, without blocking (a FIFO) and without OpenImageIO's try-every-reader fallback.
+TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
+  const fs::path dir = temp_dir() / "reader";
+  fs::create_directories(dir);
+  std::vector<float> px(8 * 4 * 3, 1.0f);
+  px[5] = 7.0f;
+  const std::string exr = (dir / "map.exr").string(), hdr = (dir / "map.hdr").string();
+  write_image(exr, 8, 4, 3, px);
+  write_image(hdr, 8, 4, 3, px);
+  {
+    const EnvironmentMap m = EnvironmentMap::load(exr);
+    EXPECT_EQ(m.load_report().format, "openexr");
+    EXPECT_EQ(m.load_report().extension_format, "openexr");
+    EXPECT_TRUE(m.warnings().empty());
+    EXPECT_FALSE(m.is_black());
+    EXPECT_FLOAT_EQ(m.max_radiance(), 7.0f);
+  }
+  // OpenEXR and Radiance content under the wrong (or no) extension: read by content, with a warning.
+  const std::vector<std::pair<std::string, std::string>> renamed{
+      {exr, "exr-named.png"}, {exr, "exr-named.hdr"}, {hdr, "hdr-named.exr"}, {hdr, "hdr-no-extension"}};
+  for (const auto& [src, name] : renamed) {
+    const std::string p = (dir / name).string();
+    fs::copy_file(src, p, fs::copy_options::overwrite_existing);
+    const EnvironmentMap m = EnvironmentMap::load(p);
+    EXPECT_EQ(m.width(), 8) << name;
+    EXPECT_NEAR(m.texel(1, 0).b, 7.0f, 0.1f) << name;
+    EXPECT_EQ(m.load_report().format, src == exr ? "openexr" : "hdr") << name;
+    const std::vector<std::string> w = m.warnings();
+    if (name == "hdr-no-extension") {
+      EXPECT_TRUE(w.empty()) << name;
+    } else {
+      ASSERT_EQ(w.size(), 1u) << name;
+      EXPECT_NE(w[0].find(p), std::string::npos) << w[0];
+      EXPECT_NE(w[0].find("despite its '"), std::string::npos) << w[0];
+    }
+  }
+  // Unknown content: the extension decides; with no reader for it, a clear error.
+  const std::string bin = (dir / "random.bin").string(), noext = (dir / "random").string();
+  for (const std::string& p : {bin, noext}) {
+    std::ofstream f(p, std::ios::binary);
+    for (int i = 0; i < 4096; ++i) f.put(static_cast<char>((i * 7919 + 13) & 0xff));
+  }
+  std::string e = load_error(bin);
+  EXPECT_NE(e.find("unknown image format (no reader for the extension '.bin'"), std::string::npos) << e;
+  e = load_error(noext);
+  EXPECT_NE(e.find("unknown image format (no file extension"), std::string::npos) << e;
+  // A FIFO would block a reader forever: refused before it is opened.
+  const std::string fifo = (dir / "fifo.exr").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << std::strerror(errno);
+  e = load_error(fifo);
+  EXPECT_NE(e.find("'" + fifo + "': is not a regular file"), std::string::npos) << e;
+  // A path through a regular file, and (unless root, who reads anything) a file without read permission.
+  e = load_error(exr + "/sub.exr");
+  EXPECT_NE(e.find("cannot load environment map '" + exr + "/sub.exr'"), std::string::npos) << e;
+  if (::geteuid() != 0) {
+    const std::string locked = (dir / "locked.exr").string();
+    fs::copy_file(exr, locked, fs::copy_options::overwrite_existing);
+    fs::permissions(locked, fs::perms::none);
+    e = load_error(locked);
+    EXPECT_NE(e.find("cannot open: Permission denied"), std::string::npos) << e;
+    fs::permissions(locked, fs::perms::owner_all);
+  }
+  // A 1x1 all-black map loads (the table and sampler handle it); the caller can tell it is black.
+  const std::string black = (dir / "black.exr").string();
+  write_image(black, 1, 1, 3, {0.0f, 0.0f, 0.0f});
+  const EnvironmentMap b = EnvironmentMap::load(black);
+  EXPECT_TRUE(b.is_black());
+  EXPECT_EQ(b.max_radiance(), 0.0f);
   fs::remove_all(dir);
 }
 

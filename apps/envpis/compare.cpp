@@ -621,10 +621,6 @@ void run(const CompareArgs& a, const std::string& command_line) {
     fs::remove(probe, ec);
   }
   const std::string report_dir = find_report_dir(a.report_dir);
-  if (!a.env.empty()) {
-    std::error_code ec;
-    if (!fs::is_regular_file(a.env, ec)) throw Error("--env '" + a.env + "' does not exist");
-  }
 
   Progress progress(a.quiet);
 
@@ -632,9 +628,10 @@ void run(const CompareArgs& a, const std::string& command_line) {
   std::shared_ptr<const EnvironmentMap> env;
   if (!a.env.empty()) {
     env = std::make_shared<const EnvironmentMap>(EnvironmentMap::load(a.env));
-    if (env->load_report().repaired() > 0 && !a.quiet)
-      std::fprintf(stderr, "envpis compare: warning: %zu non-finite or negative texels of %s set to 0\n",
-                   env->load_report().repaired(), a.env.c_str());
+    for (const std::string& w : env->warnings()) std::fprintf(stderr, "envpis compare: warning: %s\n", w.c_str());
+    if (env->is_black())
+      throw Error("environment map '" + a.env + "' has no positive radiance: every strategy renders a black image, "
+                  "there is nothing to compare");
   }
   Scene scene = [&] {
     if (is_builtin_scene(a.scene)) return make_builtin_scene(a.scene, env);

@@ -146,9 +146,12 @@ void run(const RenderArgs& a) {
     mo.rotation = Mat3::rotate_z(rotation);
     mo.scale = scale;
     env = std::make_shared<const EnvironmentMap>(EnvironmentMap::load(a.env, mo));
-    if (env->load_report().repaired() > 0)
-      std::fprintf(stderr, "envpis render: warning: %zu non-finite or negative texels of %s set to 0\n",
-                   env->load_report().repaired(), a.env.c_str());
+    for (const std::string& w : env->warnings()) std::fprintf(stderr, "envpis render: warning: %s\n", w.c_str());
+    if (env->is_black())
+      std::fprintf(stderr,
+                   "envpis render: warning: '%s' has no positive radiance: the environment lights nothing and "
+                   "every strategy falls back to BSDF sampling (the image is black)\n",
+                   a.env.c_str());
   } else if (a.env_rotation != "0" || a.env_scale != "1") {
     throw Error("--env-rotation and --env-scale need --env");
   }

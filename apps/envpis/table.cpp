@@ -404,15 +404,7 @@ void run_table(const TableArgs& a) {
   }();
   std::printf("map:     %s  %dx%d %s  scale %g  rotate %g deg\n", a.env.c_str(), map.width(), map.height(),
               to_string(map.layout()), double(map.scale()), double(rotate));
-  const MapLoadReport& rep = map.load_report();
-  if (rep.repaired() > 0)
-    std::fprintf(stderr,
-                 "envpis table: warning: '%s': %zu texel values were invalid and set to 0 (%zu NaN, %zu "
-                 "infinite, %zu negative)\n",
-                 a.env.c_str(), rep.repaired(), rep.nan_texels, rep.inf_texels, rep.negative_texels);
-  if (map.layout() == MapLayout::LatLong && map.width() != 2 * map.height())
-    std::fprintf(stderr, "envpis table: warning: '%s' is read as lat-long but is %dx%d, not 2:1\n", a.env.c_str(),
-                 map.width(), map.height());
+  for (const std::string& w : map.warnings()) std::fprintf(stderr, "envpis table: warning: %s\n", w.c_str());
   write_png(out / "map.png", tonemap_map(map));
 
   // 3. The table.
@@ -525,7 +517,9 @@ void run_table(const TableArgs& a) {
   // 7. summary.json.
   Json j;
   j["version"] = kVersion;
+  const MapLoadReport& rep = map.load_report();
   j["map"] = {{"path", a.env},
+              {"format", rep.format},
               {"width", map.width()},
               {"height", map.height()},
               {"layout", to_string(map.layout())},

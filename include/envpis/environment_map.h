@@ -39,12 +39,24 @@ struct MapLoadReport {
   std::size_t inf_texels = 0;
   std::size_t negative_texels = 0;
   std::size_t repaired() const { return nan_texels + inf_texels + negative_texels; }
+  /// OpenImageIO reader that decoded the file ("openexr", "hdr", "pnm", "tiff", "png", ...); empty for
+  /// from_pixels().
+  std::string format;
+  /// The reader the file's extension names (empty: none). It differs from `format` when the extension
+  /// is wrong (an OpenEXR file named .png): load() goes by the content for OpenEXR, Radiance HDR, PFM,
+  /// TIFF and PNG, and by the extension for anything else.
+  std::string extension_format;
 };
 
 class EnvironmentMap {
  public:
   /// Loads an OpenEXR, Radiance HDR (or any other format OpenImageIO reads) file. Throws Error naming
-  /// the file and the reason when it is missing, unreadable, corrupt, truncated or has no pixels.
+  /// the file and the reason when it is missing, not a regular file, unreadable, of an unknown format,
+  /// corrupt, truncated, too large or has no pixels.
+  ///
+  /// The reader is chosen by the file's first bytes for OpenEXR, Radiance HDR, PFM, TIFF and PNG (so a
+  /// wrong extension is harmless, and reported by warnings()), and by the extension for any other
+  /// format OpenImageIO reads. OpenImageIO's fallback of offering a file to every reader is not used.
   static EnvironmentMap load(const std::string& path, const EnvironmentMapOptions& options = {});
 
   /// Builds a map from interleaved RGB floats (width * height * 3), e.g. a synthetic test map.
@@ -68,6 +80,14 @@ class EnvironmentMap {
   float scale() const { return scale_; }
   const std::string& path() const { return path_; }
   const MapLoadReport& load_report() const { return report_; }
+  /// Largest texel channel after repair and scale; 0 for an all-black map.
+  float max_radiance() const { return max_radiance_; }
+  /// No texel has positive radiance (the ImportanceTable of such a map is empty).
+  bool is_black() const { return !(max_radiance_ > 0); }
+  /// One-line warnings about this map for a tool to print (each names the file): repaired texels,
+  /// a file extension naming another format than the content's, a lat-long map that is not 2:1.
+  /// Empty when there is nothing to say. (An all-black map is for the caller to judge: is_black().)
+  std::vector<std::string> warnings() const;
   /// Texel (x, y) after repair and scale.
   Rgb texel(int x, int y) const {
     const float* p = &pixels_[(static_cast<std::size_t>(y) * width_ + x) * 3];
@@ -84,6 +104,7 @@ class EnvironmentMap {
   int width_ = 0, height_ = 0;
   MapLayout layout_ = MapLayout::LatLong;
   float scale_ = 1.0f;
+  float max_radiance_ = 0;
   Mat3 rotation_, inverse_rotation_;
   std::vector<float> pixels_;  // RGB, row-major, top row first
   std::string path_;
