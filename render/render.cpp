@@ -36,9 +36,14 @@ void validate(const RenderOptions& o) {
   if (o.max_depth > 1024) throw Error("max depth must be at most 1024");
   if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
+  if (o.top_resolution < 1 || o.top_resolution > 256)
+    throw Error("top resolution must be in 1..256, got " + std::to_string(o.top_resolution));
   if (o.tables && o.tables->strategy != o.strategy)
     throw Error(std::string("prebuilt tables are for strategy ") + to_string(o.tables->strategy) + ", not " +
                 to_string(o.strategy));
+  if (o.tables && o.tables->table && o.strategy != Strategy::Oracle && o.tables->top_resolution != o.top_resolution)
+    throw Error("prebuilt tables have top resolution " + std::to_string(o.tables->top_resolution) + ", not " +
+                std::to_string(o.top_resolution));
 }
 
 RenderResult render(const Scene& scene, const RenderOptions& options) {
@@ -65,7 +70,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   std::optional<StrategyTables> own;
   const StrategyTables* tables = options.tables;
   if (!tables) {
-    own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product);
+    own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
+                                options.top_resolution);
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }

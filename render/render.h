@@ -42,6 +42,8 @@ struct RenderOptions {
   int tile_size = 16;
   OracleOptions oracle;
   ProductSamplerOptions product;
+  /// Top-level cells per side of the light table (env, mis, mis-comp, product): 1..256, the paper's 12.
+  int top_resolution = ImportanceTableOptions{}.top_resolution;
   /// Prebuilt tables for this strategy and the scene's environment (e.g. shared between renders);
   /// null: render() builds them (their time is reported in setup_seconds, not seconds).
   const StrategyTables* tables = nullptr;

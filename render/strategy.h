@@ -52,9 +52,14 @@ struct StrategyTables {
   ProductSamplerOptions product;
   double build_seconds = 0;
 
-  /// Throws Error for invalid options.
+  /// Top-level cells per side of the light table of env, mis, mis-comp and product (the oracle's is
+  /// oracle.resolution).
+  int top_resolution = ImportanceTableOptions{}.top_resolution;
+
+  /// Throws Error for invalid options (top_resolution and oracle.resolution: 1..256).
   static StrategyTables build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle = {},
-                              const ProductSamplerOptions& product = {});
+                              const ProductSamplerOptions& product = {},
+                              int top_resolution = ImportanceTableOptions{}.top_resolution);
 };
 
 /// The shading point a light sampler prepares for.

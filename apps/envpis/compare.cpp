@@ -51,6 +51,7 @@
 #include <vector>
 
 #include "command.h"
+#include "options.h"
 #include "envpis/envpis.h"
 #include "render/render.h"
 #include "render/scenes.h"
@@ -69,24 +70,16 @@ constexpr std::uint64_t kRefSeedOffset = 1000003;
 constexpr double kErrLog10Min = -5.0, kErrLog10Max = 1.0;  // false-colour range of the error maps
 
 struct CompareArgs {
-  std::string scene = "fig1";
-  std::string env;
+  SceneOptionArgs common{"direct"};
   std::string strategies = "mis,mis-comp,product,oracle";
   std::string spp = "16";
   std::string ref_spp = "1024";
   std::string ref_strategy = "mis";
   std::string ref_seed;
   std::string equal_time;
-  std::string integrator = "direct";
-  std::string heuristic = "power";
-  std::string max_depth = "8";
   std::string width = "0", height = "0";  // 0: half the scene camera's size
   std::string seed = "0";
-  std::string threads = "0";
   std::string repeats = "3";
-  std::string oracle_res = "64";
-  std::string oracle_dirs = "4";
-  std::string proxy_transform, proxy_min_alpha, env_mix;
   std::string cache_dir;
   std::string report_dir;
   std::string out;
@@ -98,25 +91,6 @@ struct CompareArgs {
 
 // ---------------------------------------------------------------------------------------------------
 // Option parsing
-
-long long to_int(const std::string& name, const std::string& s, long long lo, long long hi) {
-  errno = 0;
-  char* end = nullptr;
-  const long long v = std::strtoll(s.c_str(), &end, 10);
-  if (s.empty() || *end != '\0' || errno == ERANGE) throw Error(name + " must be an integer, got '" + s + "'");
-  if (v < lo || v > hi)
-    throw Error(name + " must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + s);
-  return v;
-}
-
-double to_double(const std::string& name, const std::string& s) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s.c_str(), &end);
-  if (s.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-    throw Error(name + " must be a finite number, got '" + s + "'");
-  return v;
-}
 
 std::vector<Strategy> parse_strategy_list(const std::string& list) {
   std::vector<Strategy> out;
@@ -553,31 +527,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
   // 1. Options, all checked before anything slow.
   const std::vector<Strategy> strategies = parse_strategy_list(a.strategies);
   RenderOptions base;
-  base.integrator = parse_integrator(a.integrator);
-  base.heuristic = parse_heuristic(a.heuristic);
-  base.max_depth = static_cast<int>(to_int("--max-depth", a.max_depth, 1, 1024));
-  base.width = static_cast<int>(to_int("--width", a.width, 0, kMaxImageSide));
-  base.height = static_cast<int>(to_int("--height", a.height, 0, kMaxImageSide));
-  base.threads = static_cast<int>(to_int("--threads", a.threads, 0, 4096));
-  base.oracle.resolution = static_cast<int>(to_int("--oracle-res", a.oracle_res, 1, 256));
-  base.oracle.directions = static_cast<int>(to_int("--oracle-dirs", a.oracle_dirs, 1, 256));
-  {
-    const int d = base.oracle.directions, r = static_cast<int>(std::lround(std::sqrt(double(d))));
-    if (r * r != d) throw Error("--oracle-dirs must be a square number (1, 4, 9, 16, ...), got " + a.oracle_dirs);
-  }
-  if (!a.proxy_transform.empty()) base.product.proxy.transform = parse_roughness_transform(a.proxy_transform);
-  if (!a.proxy_min_alpha.empty()) {
-    const double v = to_double("--proxy-min-alpha", a.proxy_min_alpha);
-    if (!(v >= 0 && v <= 1)) throw Error("--proxy-min-alpha must be in [0, 1], got " + a.proxy_min_alpha);
-    base.product.proxy.min_alpha = static_cast<float>(v);
-  }
-  if (!a.env_mix.empty()) {
-    const double v = to_double("--env-mix", a.env_mix);
-    if (!(v >= 0 && v <= 1)) throw Error("--env-mix must be in [0, 1], got " + a.env_mix);
-    base.product.env_mix = static_cast<float>(v);
-  }
-  const int spp = static_cast<int>(to_int("--spp", a.spp, 1, kMaxSpp));
-  const int ref_spp = static_cast<int>(to_int("--ref-spp", a.ref_spp, 1, kMaxSpp));
+  a.common.apply(base);
+  base.width = static_cast<int>(parse_integer("--width", a.width, 0, kMaxImageSide));
+  base.height = static_cast<int>(parse_integer("--height", a.height, 0, kMaxImageSide));
+  a.common.map_options();
+  const int spp = static_cast<int>(parse_integer("--spp", a.spp, 1, kMaxSpp));
+  const int ref_spp = static_cast<int>(parse_integer("--ref-spp", a.ref_spp, 1, kMaxSpp));
   if (ref_spp < spp) throw Error("--ref-spp (" + a.ref_spp + ") must be at least --spp (" + a.spp + ")");
   const Strategy ref_strategy = [&] {
     try {
@@ -586,18 +541,18 @@ void run(const CompareArgs& a, const std::string& command_line) {
       throw Error("--ref-strategy: unknown strategy '" + a.ref_strategy + "'");
     }
   }();
-  const std::uint64_t seed = static_cast<std::uint64_t>(to_int("--seed", a.seed, 0, INT64_MAX / 2));
+  const std::uint64_t seed = static_cast<std::uint64_t>(parse_integer("--seed", a.seed, 0, INT64_MAX / 2));
   const std::uint64_t ref_seed =
-      a.ref_seed.empty() ? seed + kRefSeedOffset : static_cast<std::uint64_t>(to_int("--ref-seed", a.ref_seed, 0, INT64_MAX));
+      a.ref_seed.empty() ? seed + kRefSeedOffset : static_cast<std::uint64_t>(parse_integer("--ref-seed", a.ref_seed, 0, INT64_MAX));
   if (ref_seed == seed) throw Error("--ref-seed must differ from --seed (the reference's noise must be independent)");
-  const int repeats = static_cast<int>(to_int("--repeats", a.repeats, 1, 100));
+  const int repeats = static_cast<int>(parse_integer("--repeats", a.repeats, 1, 100));
   std::optional<double> equal_time;
   bool equal_time_auto = false;
   if (!a.equal_time.empty()) {
     if (a.equal_time == "auto") {
       equal_time_auto = true;
     } else {
-      const double t = to_double("--equal-time", a.equal_time);
+      const double t = parse_number("--equal-time", a.equal_time);
       if (!(t > 0)) throw Error("--equal-time must be positive seconds or 'auto', got " + a.equal_time);
       equal_time = t;
     }
@@ -625,24 +580,10 @@ void run(const CompareArgs& a, const std::string& command_line) {
   Progress progress(a.quiet);
 
   // 2. Scene and environment.
-  std::shared_ptr<const EnvironmentMap> env;
-  if (!a.env.empty()) {
-    env = std::make_shared<const EnvironmentMap>(EnvironmentMap::load(a.env));
-    for (const std::string& w : env->warnings()) std::fprintf(stderr, "envpis compare: warning: %s\n", w.c_str());
-    if (env->is_black())
-      throw Error("environment map '" + a.env + "' has no positive radiance: every strategy renders a black image, "
-                  "there is nothing to compare");
-  }
-  Scene scene = [&] {
-    if (is_builtin_scene(a.scene)) return make_builtin_scene(a.scene, env);
-    std::error_code ec;
-    if (!fs::is_regular_file(a.scene, ec)) {
-      if (a.scene.find('/') != std::string::npos || a.scene.find('.') != std::string::npos)
-        throw Error("scene file '" + a.scene + "' does not exist");
-      throw Error("unknown scene '" + a.scene + "' (built-in scenes: fig1, fig5; or a .json scene file)");
-    }
-    return load_scene_file(a.scene, env);
-  }();
+  const Scene scene = a.common.load_scene("compare", nullptr);
+  if (!scene.has_environment() || scene.environment().is_black())
+    throw Error("the environment (" + scene.environment_description() +
+                ") has no positive radiance: every strategy renders a black image, there is nothing to compare");
   // Default size: half the scene's (a fast comparison; fig1: 384x64), keeping its aspect ratio.
   const int W = base.width > 0 ? base.width
                                : base.height > 0 ? std::max(1, static_cast<int>(std::lround(double(base.height) *
@@ -657,7 +598,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   base.width = W;
   base.height = H;
   const int threads_used = base.threads > 0 ? base.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  progress.line("scene %s, %dx%d, environment %s, integrator %s, %d threads", a.scene.c_str(), W, H,
+  progress.line("scene %s, %dx%d, environment %s, integrator %s, %d threads", a.common.scene.c_str(), W, H,
                 scene.environment_description().c_str(), to_string(base.integrator), threads_used);
 
   // 3. Tables, built once per strategy and shared by every render of it.
@@ -665,7 +606,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
   auto tables_for = [&](Strategy s) -> const StrategyTables& {
     auto it = tables.find(s);
     if (it == tables.end())
-      it = tables.emplace(s, StrategyTables::build(scene.environment(), s, base.oracle, base.product)).first;
+      it = tables.emplace(s, StrategyTables::build(scene.environment(), s, base.oracle, base.product,
+                                                   base.top_resolution)).first;
     return it->second;
   };
   // A progress bar on a terminal for renders that take a while (the reference, the oracle).
@@ -692,8 +634,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
   // 4. Reference (cached).
   json key;
   key["version"] = kVersion;
-  key["scene"] = is_builtin_scene(a.scene) ? json(a.scene) : file_identity(a.scene);
-  key["environment"] = a.env.empty() ? json(scene.environment_description()) : file_identity(a.env);
+  key["scene"] = is_builtin_scene(a.common.scene) ? json(a.common.scene) : file_identity(a.common.scene);
+  key["environment"] = a.common.env.empty() ? json(scene.environment_description()) : file_identity(a.common.env);
+  if (!a.common.env.empty()) key["environment_transform"] = {a.common.env_rotation, a.common.env_scale};
   key["width"] = W;
   key["height"] = H;
   key["integrator"] = to_string(base.integrator);
@@ -703,6 +646,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["spp"] = ref_spp;
   key["seed"] = ref_seed;
   if (ref_strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
+  if (ref_strategy != Strategy::Bsdf && ref_strategy != Strategy::Oracle) key["top"] = base.top_resolution;
   if (ref_strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha, base.product.env_mix};
   const std::string cache_dir = a.no_cache ? "" : (a.cache_dir.empty() ? default_cache_dir() : a.cache_dir);
@@ -913,8 +857,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
     std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
     j["date"] = buf;
   }
-  j["scene"] = a.scene;
-  j["environment"] = a.env.empty() ? scene.environment_description() : a.env;
+  j["scene"] = a.common.scene;
+  j["environment"] = a.common.env.empty() ? scene.environment_description() : a.common.env;
   j["integrator"] = to_string(base.integrator);
   if (base.integrator == IntegratorKind::Path) j["max_depth"] = base.max_depth;
   j["heuristic"] = to_string(base.heuristic);
@@ -928,8 +872,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"env_mix", base.product.env_mix}};
-  if (!a.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.proxy_transform;
+  if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
+  j["top_resolution"] = base.top_resolution;
+  if (!a.common.env.empty())
+    j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", a.common.env_rotation)},
+                                  {"scale", parse_number("--env-scale", a.common.env_scale)}};
   json tj = json::object();
   for (const auto& [s, t] : tables) tj[to_string(s)] = t.build_seconds;
   j["table_seconds"] = tj;
@@ -1026,7 +974,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
     html = read_text(fs::path(report_dir) / "template.html");
     replace_all(html, "{{STYLE}}", read_text(fs::path(report_dir) / "report.css"));
     replace_all(html, "{{SCRIPT}}", read_text(fs::path(report_dir) / "report.js"));
-    replace_all(html, "{{TITLE}}", html_escape("envpis compare: " + a.scene + " under " +
+    replace_all(html, "{{TITLE}}", html_escape("envpis compare: " + a.common.scene + " under " +
                                                fs::path(j["environment"].get<std::string>()).filename().string()));
     replace_all(html, "{{METRICS_JSON}}", json_for_script(j));
   } else {
@@ -1070,8 +1018,7 @@ const RegisterCommand reg{{"compare",
                            "Compare sampling strategies against a reference: metrics.json, images and an HTML report",
                            [](CLI::App& sub) {
                              auto a = std::make_shared<CompareArgs>();
-                             sub.add_option("--scene", a->scene, "fig1, fig5 or a JSON scene file")->type_name("NAME|FILE")->capture_default_str();
-                             sub.add_option("--env", a->env, "environment map (EXR/HDR); default: the scene's")->type_name("FILE");
+                             a->common.add_scene_options(sub);
                              sub.add_option("--strategies", a->strategies, "comma-separated strategies to measure")->type_name("LIST")
                                  ->capture_default_str();
                              sub.add_option("--spp", a->spp, "samples per pixel of the equal-spp comparison")->type_name("INT")->capture_default_str();
@@ -1082,21 +1029,12 @@ const RegisterCommand reg{{"compare",
                              sub.add_option("--equal-time", a->equal_time,
                                             "also compare at equal time: seconds of sampling per strategy, or 'auto' (mis's time at --spp)")
                                  ->type_name("SECONDS|auto");
-                             sub.add_option("--integrator", a->integrator, "direct or path")->type_name("I")->capture_default_str();
-                             sub.add_option("--heuristic", a->heuristic, "MIS heuristic: power or balance")->type_name("H")->capture_default_str();
-                             sub.add_option("--max-depth", a->max_depth, "path integrator: maximum bounces")->type_name("INT")->capture_default_str();
                              sub.add_option("--width", a->width, "image width (0: from --height and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--height", a->height, "image height (0: from --width and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--seed", a->seed, "random seed of the measured renders")->type_name("INT")->capture_default_str();
-                             sub.add_option("--threads", a->threads, "worker threads (0: all)")->type_name("INT")->capture_default_str();
                              sub.add_option("--repeats", a->repeats, "timing repeats of each equal-spp render under 2 s (minimum kept)")
                                  ->type_name("INT")->capture_default_str();
-                             sub.add_option("--oracle-res", a->oracle_res, "oracle: top cells per side")->type_name("INT")->capture_default_str();
-                             sub.add_option("--oracle-dirs", a->oracle_dirs, "oracle: BSDF evaluations per cell (square)")->type_name("INT")
-                                 ->capture_default_str();
-                             sub.add_option("--proxy-transform", a->proxy_transform, "product: proxy roughness transform")->type_name("T");
-                             sub.add_option("--proxy-min-alpha", a->proxy_min_alpha, "product: floor on the proxy roughness")->type_name("FLOAT");
-                             sub.add_option("--env-mix", a->env_mix, "product: fraction of environment-only sampling")->type_name("FLOAT");
+                             a->common.add_sampling_options(sub);
                              sub.add_option("--cache-dir", a->cache_dir,
                                             "reference cache (default: $ENVPIS_CACHE_DIR or ~/.cache/envpis/references)")->type_name("DIR");
                              sub.add_flag("--no-cache", a->no_cache, "always render the reference; do not cache it");

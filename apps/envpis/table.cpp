@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "command.h"
+#include "options.h"
 #include "envpis/envpis.h"
 
 namespace envpis::app {
@@ -50,35 +51,6 @@ struct TableArgs {
   std::string transform, min_alpha, env_mix = "0";
   std::string samples = "1000", seed = "1";
 };
-
-double parse_number(const std::string& option, const std::string& text) {
-  const char* s = text.c_str();
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s, &end);
-  if (text.empty() || end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
-    throw Error(option + ": expected a finite number, got '" + text + "'");
-  return v;
-}
-
-double parse_number_in(const std::string& option, const std::string& text, double lo, double hi,
-                       const char* range) {
-  const double v = parse_number(option, text);
-  if (!(v >= lo && v <= hi)) throw Error(option + ": must be " + range + ", got '" + text + "'");
-  return v;
-}
-
-long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi) {
-  const char* s = text.c_str();
-  char* end = nullptr;
-  errno = 0;
-  const long long v = std::strtoll(s, &end, 10);
-  const std::string range = std::to_string(lo) + ".." + std::to_string(hi);
-  if (text.empty() || end == s || *end != '\0' || errno == ERANGE)
-    throw Error(option + ": expected an integer in " + range + ", got '" + text + "'");
-  if (v < lo || v > hi) throw Error(option + ": must be in " + range + ", got '" + text + "'");
-  return v;
-}
 
 Vec3 parse_vec3(const std::string& option, const std::string& text) {
   std::vector<std::string> parts;

@@ -1,0 +1,155 @@
+#include "options.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#ifdef ENVPIS_HAVE_RENDER
+#include "render/scenes.h"
+#endif
+
+namespace envpis::app {
+
+namespace fs = std::filesystem;
+
+double parse_number(const std::string& option, const std::string& text) {
+  const char* s = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s, &end);
+  if (text.empty() || end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    throw Error(option + ": expected a finite number, got '" + text + "'");
+  return v;
+}
+
+double parse_number_in(const std::string& option, const std::string& text, double lo, double hi, const char* range) {
+  const double v = parse_number(option, text);
+  if (!(v >= lo && v <= hi)) throw Error(option + ": must be " + range + ", got '" + text + "'");
+  return v;
+}
+
+long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi) {
+  const char* s = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const long long v = std::strtoll(s, &end, 10);
+  const std::string range = std::to_string(lo) + ".." + std::to_string(hi);
+  if (text.empty() || end == s || *end != '\0' || errno == ERANGE)
+    throw Error(option + ": expected an integer in " + range + ", got '" + text + "'");
+  if (v < lo || v > hi) throw Error(option + ": must be in " + range + ", got '" + text + "'");
+  return v;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+void check_writable_file(const std::string& path, const std::string& option) {
+  const fs::path p(path);
+  if (p.filename().empty()) throw Error(option + ": '" + path + "' is not a file name");
+  std::error_code ec;
+  const bool existed = fs::exists(p, ec);
+  if (existed && fs::is_directory(p, ec)) throw Error(option + ": '" + path + "' is a directory");
+  errno = 0;
+  std::FILE* f = std::fopen(path.c_str(), "ab");
+  if (!f) throw Error("cannot write " + option + " '" + path + "': " + std::strerror(errno));
+  std::fclose(f);
+  if (!existed) fs::remove(p, ec);
+}
+
+#ifdef ENVPIS_HAVE_RENDER
+
+using namespace envpis::render;
+
+void SceneOptionArgs::add_scene_options(CLI::App& sub) {
+  sub.add_option("--scene", scene, "fig1, fig5 or a JSON scene file (docs/scene-format.md)")
+      ->type_name("NAME|FILE")
+      ->capture_default_str();
+  sub.add_option("--env", env, "environment map (EXR/HDR); default: the scene's (docs/scene-format.md)")
+      ->type_name("FILE");
+  sub.add_option("--env-rotation", env_rotation, "rotation of --env about +Z, degrees")->type_name("DEG");
+  sub.add_option("--env-scale", env_scale, "radiance scale of --env (>= 0)")->type_name("FLOAT");
+}
+
+void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
+  sub.add_option("--integrator", integrator, "direct or path")->type_name("I")->capture_default_str();
+  sub.add_option("--heuristic", heuristic, "MIS heuristic: power or balance")->type_name("H")->capture_default_str();
+  sub.add_option("--max-depth", max_depth, "path integrator: maximum bounces")->type_name("INT")->capture_default_str();
+  sub.add_option("--threads", threads, "worker threads (0: all)")->type_name("INT")->capture_default_str();
+  sub.add_option("--top", top, "light table: top-level cells per side (env, mis, mis-comp, product), 1..256")
+      ->type_name("INT")
+      ->capture_default_str();
+  sub.add_option("--oracle-res", oracle_res, "oracle: top cells per side, 1..256")->type_name("INT")->capture_default_str();
+  sub.add_option("--oracle-dirs", oracle_dirs, "oracle: BSDF evaluations per cell (a square number)")
+      ->type_name("INT")
+      ->capture_default_str();
+  sub.add_option("--proxy-transform", proxy_transform, "product: proxy roughness transform (default: the library's)")
+      ->type_name("T");
+  sub.add_option("--proxy-min-alpha", proxy_min_alpha,
+                 "product: floor on the transformed proxy roughness, [0, 1] (default: the library's)")
+      ->type_name("FLOAT");
+  sub.add_option("--env-mix", env_mix,
+                 "product: fraction of environment-only sampling mixed in, [0, 1] (default: the library's)")
+      ->type_name("FLOAT");
+}
+
+void SceneOptionArgs::apply(RenderOptions& o) const {
+  o.integrator = parse_integrator(integrator);
+  o.heuristic = parse_heuristic(heuristic);
+  o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
+  o.threads = static_cast<int>(parse_integer("--threads", threads, 0, 4096));
+  o.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
+  o.oracle.resolution = static_cast<int>(parse_integer("--oracle-res", oracle_res, 1, 256));
+  o.oracle.directions = static_cast<int>(parse_integer("--oracle-dirs", oracle_dirs, 1, 256));
+  const int k = static_cast<int>(std::lround(std::sqrt(double(o.oracle.directions))));
+  if (k * k != o.oracle.directions)
+    throw Error("--oracle-dirs: must be a square number (1, 4, 9, 16, ...), got '" + oracle_dirs + "'");
+  if (!proxy_transform.empty()) {
+    try {
+      o.product.proxy.transform = parse_roughness_transform(proxy_transform);
+    } catch (const Error& e) {
+      throw Error(std::string("--proxy-transform: ") + e.what());
+    }
+  }
+  if (!proxy_min_alpha.empty())
+    o.product.proxy.min_alpha = static_cast<float>(parse_number_in("--proxy-min-alpha", proxy_min_alpha, 0, 1, "in [0, 1]"));
+  if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
+}
+
+EnvironmentMapOptions SceneOptionArgs::map_options() const {
+  EnvironmentMapOptions mo;
+  mo.rotation = Mat3::rotate_z(
+      static_cast<float>(parse_number_in("--env-rotation", env_rotation, -1e6, 1e6, "in [-1e6, 1e6] degrees")));
+  mo.scale = static_cast<float>(parse_number_in("--env-scale", env_scale, 0, 3.0e38, ">= 0"));
+  if (env.empty() && (env_rotation != "0" || env_scale != "1")) throw Error("--env-rotation and --env-scale need --env");
+  return mo;
+}
+
+Scene SceneOptionArgs::load_scene(const std::string& command, std::shared_ptr<const EnvironmentMap>* env_out) const {
+  std::shared_ptr<const EnvironmentMap> map;
+  const EnvironmentMapOptions mo = map_options();
+  if (!env.empty()) {
+    map = std::make_shared<const EnvironmentMap>(EnvironmentMap::load(env, mo));
+    for (const std::string& w : map->warnings())
+      std::fprintf(stderr, "envpis %s: warning: %s\n", command.c_str(), w.c_str());
+  }
+  if (env_out) *env_out = map;
+  if (is_builtin_scene(scene)) return make_builtin_scene(scene, map);
+  std::error_code ec;
+  if (!fs::is_regular_file(scene, ec)) {
+    if (scene.find('/') != std::string::npos || scene.find('.') != std::string::npos)
+      throw Error("scene file '" + scene + "' does not exist");
+    throw Error("unknown scene '" + scene + "' (built-in scenes: fig1, fig5; or a .json scene file)");
+  }
+  return load_scene_file(scene, map);
+}
+
+#endif  // ENVPIS_HAVE_RENDER
+
+}  // namespace envpis::app

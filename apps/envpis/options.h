@@ -1,0 +1,61 @@
+// Option parsing shared by the envpis subcommands: strict numbers whose errors are one line naming the
+// option ("--spp: must be in 1..16777216, got '0'"), and the scene / environment / sampling options that
+// `envpis render` and `envpis compare` both take.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+
+#include "envpis/envpis.h"
+
+#ifdef ENVPIS_HAVE_RENDER
+#include "render/render.h"
+#include "render/scene.h"
+#endif
+
+namespace envpis::app {
+
+/// A finite number; throws Error "OPTION: expected a finite number, got 'TEXT'".
+double parse_number(const std::string& option, const std::string& text);
+/// A finite number in [lo, hi]; `range` describes the interval in the message ("in [0, 1]", ">= 0").
+double parse_number_in(const std::string& option, const std::string& text, double lo, double hi, const char* range);
+/// A decimal integer in lo..hi.
+long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi);
+std::string lower(std::string s);
+/// Fails early (before anything slow) when the file `path` cannot be created or written; leaves no
+/// file behind that was not there.
+void check_writable_file(const std::string& path, const std::string& option);
+
+#ifdef ENVPIS_HAVE_RENDER
+/// The options `render` and `compare` share, kept as text until parse time so every error is reported
+/// the same way. Defaults are the renderer's, except the integrator (each command has its own).
+struct SceneOptionArgs {
+  std::string scene = "fig1";
+  std::string env, env_rotation = "0", env_scale = "1";
+  std::string integrator;
+  std::string heuristic = "power";
+  std::string max_depth = "8";
+  std::string threads = "0";
+  std::string top = "12";
+  std::string oracle_res = "64", oracle_dirs = "4";
+  std::string proxy_transform, proxy_min_alpha, env_mix;  // empty: the library's defaults
+
+  explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
+
+  /// --scene, --env, --env-rotation, --env-scale.
+  void add_scene_options(CLI::App& sub);
+  /// --integrator, --heuristic, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix.
+  void add_sampling_options(CLI::App& sub);
+  /// Parses the sampling options into `o` (throws Error naming the option).
+  void apply(render::RenderOptions& o) const;
+  /// Checks --env-rotation / --env-scale (throws Error naming the option).
+  EnvironmentMapOptions map_options() const;
+  /// Loads --env (if given; its warnings go to stderr as "envpis COMMAND: warning: ...") and the scene
+  /// (built-in or JSON file). `env` receives the loaded map, null without --env.
+  render::Scene load_scene(const std::string& command, std::shared_ptr<const EnvironmentMap>* env) const;
+};
+#endif
+
+}  // namespace envpis::app
