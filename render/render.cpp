@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <mutex>
 #include <optional>
@@ -130,8 +131,10 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 }
                 const double mean = sum_avg / n;
                 const double var = n > 1 ? std::max(0.0, (sum_avg2 - n * mean * mean) / (n - 1)) / n : 0.0;
-                r.variance[pix] = static_cast<float>(var);
-                if (!finite || !std::isfinite(r.variance[pix])) {
+                // Radiance near the 1e30 clamp has a variance beyond float range: saturate it rather
+                // than drop a finite pixel.
+                r.variance[pix] = static_cast<float>(std::min(var, double(std::numeric_limits<float>::max())));
+                if (!finite || !std::isfinite(var)) {
                   out[0] = out[1] = out[2] = 0.0f;
                   r.variance[pix] = 0.0f;
                   nonfinite.fetch_add(1, std::memory_order_relaxed);

@@ -1,7 +1,6 @@
 // `envpis table` end to end: runs the built command on a blender-data map and on bad inputs, and checks
 // exit codes, one-line error messages, and the pictures and summary.json it writes.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
@@ -14,40 +13,23 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kBinary = ENVPIS_BINARY_DIR "/apps/envpis/envpis";
+using envpis::test::CmdResult;
+const std::string& kBinary = envpis::test::envpis_binary();
 
-struct CmdResult {
-  int code = -1;
-  std::string output;  // stdout and stderr
-};
+std::string quote(const std::string& s) { return envpis::test::shell_quote(s); }
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-// Runs `envpis table ARGS` for every entry at once (the command's start-up, loading OpenImageIO's
-// many shared libraries, dominates these short runs) and collects exit codes and output.
+// Runs `envpis table ARGS` for every entry, several at a time.
 std::vector<CmdResult> run_tables(const std::vector<std::string>& args) {
-  std::vector<FILE*> pipes;
-  for (const std::string& a : args) pipes.push_back(popen((quote(kBinary) + " table " + a + " 2>&1").c_str(), "r"));
-  std::vector<CmdResult> results(args.size());
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (!pipes[i]) continue;
-    char buf[4096];
-    std::size_t n;
-    while ((n = fread(buf, 1, sizeof buf, pipes[i])) > 0) results[i].output.append(buf, n);
-    const int status = pclose(pipes[i]);
-    results[i].code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  return results;
+  std::vector<std::string> full;
+  for (const std::string& a : args) full.push_back("table " + a);
+  return envpis::test::run_envpis_all(full);
 }
 
 CmdResult run_table(const std::string& args) { return run_tables({args})[0]; }

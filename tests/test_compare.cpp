@@ -2,8 +2,8 @@
 // whose metrics.json is checked against the images it wrote (relMSE recomputed from the EXR files with
 // OpenImageIO, per image and per object), the reference cache, and the report files.
 #include <gtest/gtest.h>
+#include "cli_util.h"
 #include <OpenImageIO/imageio.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,22 +25,12 @@ using json = nlohmann::json;
 const std::string kEnvpis = std::string(ENVPIS_BINARY_DIR) + "/apps/envpis/envpis";
 const std::string kReportDir = fs::path(ENVPIS_TEST_DATA).parent_path().parent_path().string() + "/report";
 
-struct CmdResult {
-  int status = -1;
-  std::string output;  // stdout + stderr
-};
+using envpis::test::CmdResult;
 
+// `args` starts with "compare"; the report templates come from the source tree.
 CmdResult run(const std::string& args) {
-  const std::string cmd = "ENVPIS_REPORT_DIR='" + kReportDir + "' '" + kEnvpis + "' " + args + " 2>&1";
-  CmdResult r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  const std::string rest = args.size() > 7 ? args.substr(7) : std::string();
+  return envpis::test::run_envpis("compare --report-dir " + envpis::test::shell_quote(kReportDir) + rest);
 }
 
 std::vector<float> read_rgb(const fs::path& path, int* w, int* h, int channels = 3) {
@@ -83,7 +73,7 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
   };
   for (const auto& [args, needle] : cases) {
     const CmdResult r = run(args);
-    EXPECT_EQ(r.status, 1) << args << "\n" << r.output;
+    EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("envpis compare: error: "), std::string::npos) << args << "\n" << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << args << "\n" << r.output;
     // One line: the message and its newline, nothing else.
@@ -104,7 +94,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
                            "--oracle-res 8 --oracle-dirs 1 --equal-time auto --repeats 1 --no-plots --quiet "
                            "--cache-dir '" + cache.string() + "' --out '" + out.string() + "'";
   const CmdResult r = run(args);
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("report "), std::string::npos) << r.output;
 
   json m;
@@ -186,7 +176,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
 
   // Second run: the reference comes from the cache, bit-identical.
   const CmdResult r2 = run(args);
-  ASSERT_EQ(r2.status, 0) << r2.output;
+  ASSERT_EQ(r2.code, 0) << r2.output;
   json m2;
   std::ifstream(out / "metrics.json") >> m2;
   EXPECT_TRUE(m2["reference"]["cached"].get<bool>());

@@ -374,6 +374,10 @@ void run_table(const TableArgs& a) {
       throw Error("cannot use environment map '" + a.env + "': " + e.what());
     }
   }();
+  if (map.is_black())
+    throw Error("environment map '" + a.env +
+                "' has no positive radiance (black everywhere after repair and --scale): the importance "
+                "table would be empty, there is nothing to sample");
   std::printf("map:     %s  %dx%d %s  scale %g  rotate %g deg\n", a.env.c_str(), map.width(), map.height(),
               to_string(map.layout()), double(map.scale()), double(rotate));
   for (const std::string& w : map.warnings()) std::fprintf(stderr, "envpis table: warning: %s\n", w.c_str());
