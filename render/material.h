@@ -59,7 +59,21 @@ class Material {
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const;
   /// Fills the proxy for outgoing direction wo (local frame). The caller calls
   /// ProductSampler::prepare(normal, wo_world, proxy) with the same normal the frame uses.
+  /// With closed_surface() set, the lobes on the inside (local z < 0) are left out (see below).
   void fill_proxy(BsdfProxy& proxy, Vec3 wo) const;
+  /// Declares that every surface with this material is closed and its local +Z (the outward normal
+  /// of a one-sided, transmissive material) points out of the volume it bounds. A light sample, i.e. a
+  /// shadow ray towards the environment, that leaves such a surface towards its inside (wi.z < 0)
+  /// must cross the surface again and is always blocked; so fill_proxy omits the proxy lobes that
+  /// point inside: refraction and translucency when wo is outside (wo.z > 0), reflection and diffuse
+  /// when wo is inside. The light-sampling distribution then puts no samples where the integrand is
+  /// 0 by visibility; eval / pdf / sample are unchanged, and BSDF sampling still covers every
+  /// direction, so the estimate stays unbiased whatever this flag says. Scene::commit() sets it for
+  /// transmissive materials used only by spheres and closed, outward-oriented meshes (render/scene.h);
+  /// docs/proxy.md has the measurements. Meaningless for two-sided (opaque) materials, whose frame is
+  /// flipped towards the viewer (they have no lobe below the surface anyway).
+  void set_closed_surface(bool closed) { closed_surface_ = closed; }
+  bool closed_surface() const { return closed_surface_; }
   /// Sum of weight * albedo(wo) over the lobes (the material's estimated directional albedo).
   float albedo(Vec3 wo) const;
   std::size_t lobe_count() const { return lobes_.size(); }
@@ -74,6 +88,7 @@ class Material {
   };
   std::vector<Entry> lobes_;
   std::string name_;
+  bool closed_surface_ = false;
 };
 
 // ---- factories (render/materials/*.cpp) ----

@@ -2,7 +2,12 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
 #include <string>
 
 namespace envpis::render {
@@ -35,6 +40,45 @@ const char* embree_error_name(RTCError code) {
 void check_embree(RTCDevice device, const char* what) {
   const RTCError err = rtcGetDeviceError(device);
   if (err != RTC_ERROR_NONE) throw Error(std::string("embree: ") + what + " failed: " + embree_error_name(err));
+}
+
+/// Whether the mesh is a closed surface whose face normals fn point out of the volume it bounds:
+/// after welding vertices at bit-identical positions (seams of UV-split or normal-split vertices),
+/// every directed edge (a, b) of the triangles, taken counter-clockwise about their face normal,
+/// occurs exactly once and its reverse (b, a) exactly once, and the signed volume is positive.
+/// Triangles whose welded corners coincide are ignored (they have no area). Anything else (an
+/// open border, a non-manifold edge, inconsistent or inward normals) is not closed.
+bool mesh_is_closed_outward(const TriangleMesh& m, const std::vector<Vec3>& fn) {
+  std::map<std::array<std::uint32_t, 3>, std::uint32_t> weld;
+  std::vector<std::uint32_t> id(m.positions.size());
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    std::array<std::uint32_t, 3> key;
+    const float xyz[3] = {m.positions[i].x + 0.0f, m.positions[i].y + 0.0f, m.positions[i].z + 0.0f};  // -0 -> +0
+    std::memcpy(key.data(), xyz, sizeof xyz);
+    id[i] = weld.emplace(key, static_cast<std::uint32_t>(weld.size())).first->second;
+  }
+  std::vector<std::uint64_t> edges;
+  edges.reserve(m.indices.size());
+  double volume6 = 0;
+  for (std::size_t t = 0; t < fn.size(); ++t) {
+    std::uint32_t v[3] = {m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]};
+    const Vec3 p0 = m.positions[v[0]], p1 = m.positions[v[1]], p2 = m.positions[v[2]];
+    if (dot(cross(p1 - p0, p2 - p0), fn[t]) < 0) std::swap(v[1], v[2]);  // orient by the face normal
+    const std::uint32_t a = id[v[0]], b = id[v[1]], c = id[v[2]];
+    if (a == b || b == c || c == a) continue;
+    for (auto [x, y] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}})
+      edges.push_back(std::uint64_t(x) << 32 | y);
+    const Vec3 q0 = m.positions[v[0]], q1 = m.positions[v[1]], q2 = m.positions[v[2]];
+    volume6 += double(dot(q0, cross(q1, q2)));
+  }
+  if (edges.empty()) return false;
+  std::sort(edges.begin(), edges.end());
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return false;  // an edge used twice one way
+  for (std::uint64_t e : edges) {
+    const std::uint64_t reverse = (e << 32) | (e >> 32);
+    if (!std::binary_search(edges.begin(), edges.end(), reverse)) return false;  // a border edge
+  }
+  return volume6 > 0;
 }
 
 }  // namespace
@@ -73,6 +117,7 @@ int Scene::add_sphere(std::string name, Vec3 center, float radius, int material)
   o.material = material;
   o.center = center;
   o.radius = radius;
+  o.closed = true;
   objects_.push_back(std::move(o));
   meshes_.emplace_back();
   face_normals_.emplace_back();
@@ -113,6 +158,7 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
   o.type = ObjectType::Mesh;
   o.material = material;
   o.triangles = tris;
+  o.closed = mesh_is_closed_outward(mesh, fn);
   objects_.push_back(std::move(o));
   meshes_.push_back(std::move(mesh));
   face_normals_.push_back(std::move(fn));
@@ -123,6 +169,12 @@ void Scene::commit() {
   if (committed_) return;
   if (!env_) throw Error("scene: no environment map");
   if (objects_.empty()) throw Error("scene: no object");
+  // Closed-surface flags: transmissive materials used (only) by closed objects.
+  std::vector<char> closed(materials_.size(), 0), open(materials_.size(), 0);
+  for (const ObjectInfo& o : objects_) (o.closed ? closed : open)[static_cast<std::size_t>(o.material)] = 1;
+  for (std::size_t i = 0; i < materials_.size(); ++i)
+    materials_[i].bsdf.set_closed_surface(proxy_closed_surfaces_ && materials_[i].transmissive && closed[i] &&
+                                          !open[i]);
   embree_ = std::make_unique<Embree>();
   embree_->device = rtcNewDevice(nullptr);
   if (!embree_->device) throw Error(std::string("embree: cannot create a device: ") + embree_error_name(rtcGetDeviceError(nullptr)));

@@ -7,6 +7,14 @@
 // Orientation: a sphere's geometric normal points outwards. A mesh's geometric normal follows the
 // triangle winding (counter-clockwise seen from the front), unless the mesh has vertex normals: then
 // it is flipped where needed to agree with them. A dielectric's "outside" is where the normal points.
+//
+// Closed surfaces: a sphere is closed; a mesh is closed when, after welding vertices at equal
+// positions, each edge is shared by exactly two triangles whose geometric normals (as above) are
+// consistently oriented, pointing out of the volume (positive signed volume). commit() marks a
+// transmissive material whose objects are all closed with Material::set_closed_surface(true), so the
+// product strategy's BSDF proxy leaves out the lobes that point inside, where no light sample can
+// reach the environment (docs/proxy.md, "Closed surfaces"). set_proxy_closed_surfaces(false) turns
+// that off (commit() then clears the flag on every material).
 #pragma once
 
 #include <cstdint>
@@ -46,6 +54,7 @@ struct ObjectInfo {
   Vec3 center;       ///< sphere centre (spheres only)
   float radius = 0;  ///< sphere radius (spheres only)
   std::size_t triangles = 0;
+  bool closed = false;  ///< a closed surface with outward normals (see above)
 };
 
 struct SurfaceHit {
@@ -88,8 +97,13 @@ class Scene {
   void set_environment_description(std::string d) { env_description_ = std::move(d); }
   const std::string& environment_description() const { return env_description_; }
 
-  /// Builds the Embree acceleration structure. Throws Error when there is no environment, no object
-  /// or Embree fails.
+  /// Whether commit() marks transmissive materials used only by closed objects as closed surfaces
+  /// (default true; see above). Call before commit().
+  void set_proxy_closed_surfaces(bool enable) { proxy_closed_surfaces_ = enable; }
+  bool proxy_closed_surfaces() const { return proxy_closed_surfaces_; }
+
+  /// Builds the Embree acceleration structure and sets each material's closed-surface flag. Throws
+  /// Error when there is no environment, no object or Embree fails.
   void commit();
   bool committed() const { return committed_; }
 
@@ -108,6 +122,7 @@ class Scene {
   CameraSpec camera_;
   std::shared_ptr<const EnvironmentMap> env_;
   std::string env_description_;
+  bool proxy_closed_surfaces_ = true;
   bool committed_ = false;
 };
 

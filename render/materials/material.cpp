@@ -6,6 +6,8 @@
 //           MIS over the lobes with the balance heuristic. pdf(wo, wi) returns the same mixture.
 // Lobes with zero albedo for wo are never chosen; if every lobe has zero albedo the material is
 // black for wo and sample() returns nullopt.
+// fill_proxy: every lobe adds itself; for a closed surface only the lobes on the outside are kept
+// (render/material.h, set_closed_surface).
 #include <array>
 
 #include "render/materials/lobe_common.h"
@@ -115,7 +117,21 @@ float Material::albedo(Vec3 wo) const {
 
 void Material::fill_proxy(BsdfProxy& proxy, Vec3 wo) const {
   if (!microfacet::usable(wo)) return;
-  for (const Entry& e : lobes_) e.lobe->add_to_proxy(proxy, wo, e.weight);
+  if (!closed_surface_) {
+    for (const Entry& e : lobes_) e.lobe->add_to_proxy(proxy, wo, e.weight);
+    return;
+  }
+  // Closed surface: keep only the lobes on the outside, where a light sample can reach the
+  // environment. Seen from outside these are the ones on wo's side, seen from inside the ones across.
+  BsdfProxy all;
+  for (const Entry& e : lobes_) e.lobe->add_to_proxy(all, wo, e.weight);
+  if (wo.z > 0) {
+    proxy.add_diffuse(all.diffuse);
+    proxy.add_reflection(all.reflection, all.alpha_reflection);
+  } else {
+    proxy.add_translucent(all.translucent);
+    proxy.add_refraction(all.refraction, all.alpha_refraction, all.ior);
+  }
 }
 
 }  // namespace envpis::render

@@ -684,6 +684,46 @@ TEST(MaterialProxy, LobesFillTheirAxes) {
   }
 }
 
+// A closed surface keeps only the proxy lobes on its outside: seen from outside (wo.z > 0) the
+// reflection and diffuse lobes, seen from inside the refraction and translucent lobes; an open one
+// keeps everything; sampling and evaluation do not change.
+TEST(MaterialProxy, ClosedSurfaceKeepsOnlyTheOutsideLobes) {
+  Material m;
+  m.add(make_dielectric(0.2f, 1.5f), 0.7f);
+  m.add(make_translucent({0.5f, 0.5f, 0.5f}), 0.2f);
+  m.add(make_lambert({0.5f, 0.5f, 0.5f}), 0.1f);
+  ASSERT_FALSE(m.closed_surface());
+  Material closed = m;
+  closed.set_closed_surface(true);
+  for (float cz : {0.9f, 0.3f, -0.3f, -0.9f}) {
+    const Vec3 wo = dir(cz);
+    BsdfProxy open_p, closed_p;
+    m.fill_proxy(open_p, wo);
+    closed.fill_proxy(closed_p, wo);
+    ASSERT_GT(open_p.reflection, 0.0f);
+    ASSERT_GT(open_p.refraction, 0.0f);
+    ASSERT_GT(open_p.diffuse, 0.0f);
+    ASSERT_GT(open_p.translucent, 0.0f);
+    if (cz > 0) {
+      EXPECT_FLOAT_EQ(closed_p.reflection, open_p.reflection);
+      EXPECT_FLOAT_EQ(closed_p.alpha_reflection, open_p.alpha_reflection);
+      EXPECT_FLOAT_EQ(closed_p.diffuse, open_p.diffuse);
+      EXPECT_EQ(closed_p.refraction, 0.0f);
+      EXPECT_EQ(closed_p.translucent, 0.0f);
+    } else {
+      EXPECT_FLOAT_EQ(closed_p.refraction, open_p.refraction);
+      EXPECT_FLOAT_EQ(closed_p.alpha_refraction, open_p.alpha_refraction);
+      EXPECT_FLOAT_EQ(closed_p.ior, open_p.ior);
+      EXPECT_FLOAT_EQ(closed_p.translucent, open_p.translucent);
+      EXPECT_EQ(closed_p.reflection, 0.0f);
+      EXPECT_EQ(closed_p.diffuse, 0.0f);
+    }
+    const Vec3 wi = dir(-cz * 0.5f);
+    EXPECT_EQ(closed.pdf(wo, wi), m.pdf(wo, wi));
+    EXPECT_EQ(closed.eval(wo, wi).average(), m.eval(wo, wi).average());
+  }
+}
+
 // ------------------------------------------------------------------------------------------------
 // The mixture
 

@@ -274,6 +274,121 @@ TEST(LightSampler, SampleAndPdfAgreeAndIntegrateToOne) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Closed surfaces (render/scene.h): which transmissive materials get the closed-surface proxy
+
+/// A cube of half-size 1 around c, two triangles per face, each face with its own four vertices
+/// (so closedness needs the welding), counter-clockwise seen from outside unless `inward`.
+TriangleMesh cube(Vec3 c, bool inward = false, int faces = 6) {
+  TriangleMesh m;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float side : {-1.0f, 1.0f}) {
+      if (faces-- <= 0) return m;
+      const auto base = static_cast<std::uint32_t>(m.positions.size());
+      Vec3 n{0, 0, 0}, u{0, 0, 0}, v{0, 0, 0};
+      (axis == 0 ? n.x : axis == 1 ? n.y : n.z) = side;
+      (axis == 0 ? u.y : axis == 1 ? u.z : u.x) = 1;
+      v = cross(n, u);  // (u, v, n) right-handed: u x v = n, so (0, u, u+v) is counter-clockwise about n
+      for (Vec3 q : {u * -1.0f + v * -1.0f, u - v, u + v, v - u}) m.positions.push_back(c + n + q);
+      for (std::uint32_t k : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + k);
+    }
+  if (inward)
+    for (std::size_t k = 0; k < m.indices.size(); k += 3) std::swap(m.indices[k + 1], m.indices[k + 2]);
+  return m;
+}
+
+TEST(ClosedSurfaces, DetectedForSpheresAndClosedOutwardMeshesOnly) {
+  const Scene& fig1 = small_fig1();
+  for (int i = 0; i < fig1.material_count(); ++i) {
+    const SceneMaterial& m = fig1.material(i);
+    EXPECT_EQ(m.bsdf.closed_surface(), m.transmissive) << m.name;  // the glass sphere only
+  }
+  EXPECT_TRUE(fig1.material(fig1.objects()[7].material).bsdf.closed_surface());
+
+  auto glass = [] {
+    Material m;
+    m.add(make_dielectric(0.2f, 1.5f));
+    return m;
+  };
+  Scene s;
+  const int on_sphere = s.add_material("on-sphere", glass(), true);
+  const int on_cube = s.add_material("on-cube", glass(), true);
+  const int on_knot = s.add_material("on-knot", glass(), true);
+  const int on_quad = s.add_material("on-quad", glass(), true);
+  const int on_open_cube = s.add_material("on-open-cube", glass(), true);
+  const int on_inward_cube = s.add_material("on-inward-cube", glass(), true);
+  const int shared = s.add_material("shared", glass(), true);
+  const int opaque = s.add_material("opaque", glass(), false);
+  s.add_sphere("sphere", {0, 0, 0}, 1, on_sphere);
+  s.add_mesh("cube", cube({3, 0, 0}), on_cube);
+  s.add_mesh("knot", make_torus_knot(2, 3, 2.0f, 0.8f, 0.45f, 60, 8), on_knot);
+  s.add_mesh("quad", make_quad({0, 6, 0}, 1, 1), on_quad);
+  s.add_mesh("open-cube", cube({6, 0, 0}, false, 5), on_open_cube);
+  s.add_mesh("inward-cube", cube({9, 0, 0}, true), on_inward_cube);
+  s.add_sphere("shared-sphere", {0, 9, 0}, 1, shared);
+  s.add_mesh("shared-quad", make_quad({0, 12, 0}, 1, 1), shared);
+  s.add_sphere("opaque-sphere", {0, 15, 0}, 1, opaque);
+  s.set_environment(test_sky());
+  const auto& o = s.objects();
+  EXPECT_TRUE(o[0].closed && o[1].closed && o[2].closed);
+  EXPECT_FALSE(o[3].closed || o[4].closed || o[5].closed);
+  s.commit();
+  EXPECT_TRUE(s.material(on_sphere).bsdf.closed_surface());
+  EXPECT_TRUE(s.material(on_cube).bsdf.closed_surface());
+  EXPECT_TRUE(s.material(on_knot).bsdf.closed_surface());
+  EXPECT_FALSE(s.material(on_quad).bsdf.closed_surface());
+  EXPECT_FALSE(s.material(on_open_cube).bsdf.closed_surface());
+  EXPECT_FALSE(s.material(on_inward_cube).bsdf.closed_surface());
+  EXPECT_FALSE(s.material(shared).bsdf.closed_surface());
+  EXPECT_FALSE(s.material(opaque).bsdf.closed_surface());  // two-sided: no inside to leave out
+
+  Scene off;
+  off.set_proxy_closed_surfaces(false);
+  const int g = off.add_material("glass", glass(), true);
+  off.add_sphere("sphere", {0, 0, 0}, 1, g);
+  off.set_environment(test_sky());
+  off.commit();
+  EXPECT_FALSE(off.material(g).bsdf.closed_surface());
+}
+
+// At a point on the outside of the fig1 glass sphere, product light samples go into the sphere
+// (where the sphere always blocks them) only through cells that straddle the horizon; without the
+// closed-surface proxy they follow the refraction lobe's ~90% of the proxy weight.
+TEST(ClosedSurfaces, ProductLightSamplesOfTheGlassSphereStayOutside) {
+  const Scene& scene = small_fig1();
+  const Material& glass = scene.material(scene.objects()[7].material).bsdf;
+  ASSERT_TRUE(glass.closed_surface());
+  Material open_glass = glass;
+  open_glass.set_closed_surface(false);
+  const StrategyTables t = StrategyTables::build(*test_sky(), Strategy::Product);
+  for (const Material* m : std::array<const Material*, 2>{&glass, &open_glass}) {
+    LightSampler ls(t);
+    const Frame frame(normalize(Vec3{0.2f, -1.0f, 0.3f}));
+    ShadingContext sc;
+    sc.n = frame.n;
+    sc.wo = normalize(Vec3{0.0f, -1.0f, 0.1f});
+    sc.wo_local = frame.to_local(sc.wo);
+    sc.frame = &frame;
+    sc.bsdf = m;
+    ls.prepare(sc);
+    SampleRng rng(3, 4, 5);
+    int inside = 0, valid = 0;
+    for (int i = 0; i < 4000; ++i) {
+      const DirectionSample d = ls.sample(rng.next2d());
+      if (!(d.pdf > 0)) continue;
+      ++valid;
+      inside += dot(d.direction, frame.n) < 0;
+    }
+    ASSERT_GT(valid, 3900);
+    const double share = double(inside) / valid;
+    std::printf("%s glass: %.3f of the light samples go inside\n", m == &glass ? "closed" : "open", share);
+    if (m == &glass)
+      EXPECT_LT(share, 0.15);
+    else
+      EXPECT_GT(share, 0.5);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
 // Scene files
 
 struct TempDir {
