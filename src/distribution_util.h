@@ -1,6 +1,7 @@
-// Internal: sampling a piecewise-constant 2D distribution stored as one row-major array of running
-// sums normalized to end at 1 (the marginal over rows is read off the row ends, so no separate
-// marginal table is stored).
+// Internal: sampling piecewise-constant 2D distributions in two layouts:
+//   split     running sums normalized to end at 1, row ends first (the fine tables, built once);
+//   row scan  masses with row totals and their running sums (the top levels: the product sampler
+//             rebuilds its per shading point, so it writes no per-cell running sums).
 #pragma once
 
 #include <algorithm>
@@ -19,40 +20,8 @@ struct Flat2DSample {
 };
 
 /// `cdf` has w * h entries: cdf[y * w + x] = sum of the masses of cells before and including (x, y)
-/// in row-major order; `total` is the last entry (1 for a normalized table). Chooses a row with u.y
-/// (from the row ends), then a column inside it with u.x: the sample keeps the 2D stratification of u.
-inline Flat2DSample sample_flat2d(const float* cdf, int w, int h, Point2 u, float total = 1.0f) {
-  const float uy = clamp_unit(u.y) * total, ux = clamp_unit(u.x);
-  // Row: first r whose row end exceeds uy.
-  int lo = 0, hi = h - 1;
-  while (lo < hi) {
-    const int mid = (lo + hi) >> 1;
-    if (cdf[mid * w + w - 1] > uy) hi = mid;
-    else lo = mid + 1;
-  }
-  Flat2DSample s;
-  s.y = lo;
-  const float row_start = s.y > 0 ? cdf[s.y * w - 1] : 0.0f;
-  const float row_end = cdf[s.y * w + w - 1];
-  const float row_mass = row_end - row_start;
-  s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;  // row_start <= uy < row_end
-  // Column: first x in the row whose running sum exceeds the target.
-  const float target = row_start + ux * row_mass;
-  const float* row = cdf + s.y * w;
-  const float* it = std::upper_bound(row, row + w, target);
-  s.x = static_cast<int>(it - row);
-  if (s.x >= w) {  // rounding put the target at the row's end: take the last column with mass
-    s.x = w - 1;
-    while (s.x > 0 && row[s.x] <= row[s.x - 1]) --s.x;
-  }
-  const float c0 = s.x > 0 ? row[s.x - 1] : row_start;
-  const float mass = row[s.x] - c0;
-  s.ox = mass > 0 ? clamp_unit((target - c0) / mass) : 0.5f;
-  return s;
-}
-
-/// The same running sums stored so that both searches of a sample read contiguous memory: first the
-/// h row ends (the marginal), then each row's other w - 1 entries. Same size as the row-major array.
+/// in row-major order, normalized to end at 1. Stored so that both searches of a sample read
+/// contiguous memory: first the h row ends (the marginal), then each row's other w - 1 entries.
 inline void store_split2d(const float* cdf, int w, int h, float* out) {
   for (int y = 0; y < h; ++y) {
     out[y] = cdf[y * w + w - 1];
@@ -60,7 +29,8 @@ inline void store_split2d(const float* cdf, int w, int h, float* out) {
   }
 }
 
-/// sample_flat2d() for the split layout of store_split2d().
+/// A row with u.y, then a column inside it with u.x, for the layout of store_split2d(): the sample
+/// keeps the 2D stratification of u.
 inline Flat2DSample sample_split2d(const float* split, int w, int h, Point2 u) {
   const float uy = clamp_unit(u.y), ux = clamp_unit(u.x);
   Flat2DSample s;
@@ -82,25 +52,38 @@ inline Flat2DSample sample_split2d(const float* split, int w, int h, Point2 u) {
   return s;
 }
 
-/// A w x h table stored as running sums inside each row (`within`, w * h entries) and running sums of
-/// the row totals (`rows`, h entries, the last being `total`): the row with u.y, the column with u.x.
-inline Flat2DSample sample_rows2d(const float* rows, const float* within, int w, int h, Point2 u, float total) {
+/// A w x h table of masses `mass` (row-major) with its row totals `row_sum` and their running sums
+/// `rows` (h entries, the last being `total`): the row with u.y (binary search), then the column with
+/// u.x by a linear scan of that row's masses (no per-cell running sums are needed).
+inline Flat2DSample sample_row_scan(const float* rows, const float* row_sum, const float* mass, int w, int h, Point2 u,
+                                    float total) {
   const float uy = clamp_unit(u.y) * total, ux = clamp_unit(u.x);
   Flat2DSample s;
   s.y = static_cast<int>(std::min<long>(std::upper_bound(rows, rows + h, uy) - rows, h - 1));
+  while (s.y > 0 && !(row_sum[s.y] > 0)) --s.y;  // rounding past the last row with mass
   const float row_start = s.y > 0 ? rows[s.y - 1] : 0.0f;
-  const float* row = within + static_cast<std::size_t>(s.y) * w;
-  const float row_mass = row[w - 1];
+  const float row_mass = row_sum[s.y];
   s.oy = row_mass > 0 ? clamp_unit((uy - row_start) / row_mass) : 0.5f;
   const float target = ux * row_mass;
-  s.x = static_cast<int>(std::upper_bound(row, row + w, target) - row);
-  if (s.x >= w) {  // rounding at the row's end: the last column with mass
-    s.x = w - 1;
-    while (s.x > 0 && row[s.x] <= row[s.x - 1]) --s.x;
+  const float* row = mass + static_cast<std::size_t>(s.y) * w;
+  // The first column whose running sum exceeds the target; if rounding leaves the target at the
+  // row's end, the last column with mass. Columns without mass are never chosen.
+  float c0 = 0, start = 0;
+  s.x = -1;
+  for (int x = 0; x < w; ++x) {
+    const float m = row[x];
+    if (!(m > 0)) continue;
+    s.x = x;
+    start = c0;
+    c0 += m;
+    if (c0 > target) break;
   }
-  const float c0 = s.x > 0 ? row[s.x - 1] : 0.0f;
-  const float mass = row[s.x] - c0;
-  s.ox = mass > 0 ? clamp_unit((target - c0) / mass) : 0.5f;
+  if (s.x < 0) {  // an empty row (only when the whole table is empty): any cell, centred
+    s.x = 0;
+    s.ox = 0.5f;
+    return s;
+  }
+  s.ox = clamp_unit((target - start) / row[s.x]);
   return s;
 }
 

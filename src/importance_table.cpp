@@ -331,12 +331,17 @@ void ImportanceTable::build_cells() {
     cell_sum_[c] = static_cast<float>(sums[c]);
     cell_prob_[c] = total > 0 ? static_cast<float>(sums[c] / total) : 0.0f;
   }
-  // Top-level running sums for environment-only sampling.
-  top_cdf_.assign(cells, 0.0f);
+  // Top-level row totals and their running sums for environment-only sampling (the same layout and
+  // search as the product sampler's: a row, then a scan of its cells).
+  top_row_sum_.assign(T_, 0.0f);
+  top_row_cdf_.assign(T_, 0.0f);
   double run = 0;
-  for (int c = 0; c < cells; ++c) top_cdf_[c] = total > 0 ? static_cast<float>((run += sums[c]) / total) : 0.0f;
-  const float last = top_cdf_[cells - 1];
-  for (int c = cells - 1; c >= 0 && top_cdf_[c] >= last; --c) top_cdf_[c] = 1.0f;
+  for (int r = 0; r < T_; ++r) {
+    double row = 0;
+    for (int k = 0; k < T_; ++k) row += cell_prob_[r * T_ + k];
+    top_row_sum_[r] = static_cast<float>(row);
+    top_row_cdf_[r] = static_cast<float>(run += row);
+  }
   padded_ = (cells + 15) / 16 * 16;
   for (auto& a : soa_) a.assign(padded_, 0.0f);
   for (int c = 0; c < cells; ++c) soa_[5][c] = cell_prob_[c];
@@ -450,7 +455,8 @@ float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
 DirectionSample ImportanceTable::sample(Point2 u) const {
   DirectionSample out;
   if (empty_) return out;
-  const detail::Flat2DSample s = detail::sample_flat2d(top_cdf_.data(), T_, T_, u);
+  const detail::Flat2DSample s = detail::sample_row_scan(top_row_cdf_.data(), top_row_sum_.data(), cell_prob_.data(),
+                                                          T_, T_, u, top_row_cdf_[T_ - 1]);
   const int c = s.y * T_ + s.x;
   float pc;
   bool interior;
@@ -473,7 +479,8 @@ float ImportanceTable::pdf(Vec3 d) const {
 std::size_t ImportanceTable::bytes_used() const {
   std::size_t b = sizeof(*this);
   b += func_.capacity() * sizeof(float) + cdf_.capacity() * sizeof(float);
-  b += (cell_sum_.capacity() + cell_prob_.capacity() + top_cdf_.capacity()) * sizeof(float);
+  b += (cell_sum_.capacity() + cell_prob_.capacity() + top_row_sum_.capacity() + top_row_cdf_.capacity()) *
+       sizeof(float);
   b += cones_.capacity() * sizeof(Cone);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
   return b;

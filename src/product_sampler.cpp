@@ -15,7 +15,7 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
   if (!(options.env_mix >= 0.0f && options.env_mix <= 1.0f)) throw Error("env_mix must be in [0, 1]");
   kernels_ = options.simd ? &detail::kernels_best() : &detail::kernels_scalar();
   prob_.assign(table.padded_cell_count(), 0.0f);
-  cdf_.assign(table.cell_count(), 0.0f);
+  row_sum_.assign(table.top_resolution(), 0.0f);
   row_cdf_.assign(table.top_resolution(), 0.0f);
 }
 
@@ -33,7 +33,7 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
                                     table_->soa_cos(),    table_->soa_sin(),    table_->soa_prob(),
                                     table_->padded_cell_count()};
     static_cast<const detail::Kernels*>(kernels_)->product_weights(arrays, detail::to_lobe_params(prepared_), prob);
-    sum = running_sums();
+    sum = row_sums();
   }
   // Nothing the proxy can see: environment only. A sum below FLT_MIN (denormal lobe weights) counts as
   // nothing too: its reciprocal would overflow to inf and so would every pdf (found by fuzzing).
@@ -48,27 +48,38 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
       // Not a * prob[c] when a == 0: the fallback after an infinite product weight would give 0 * inf = NaN.
       prob[c] = (a > 0.0f ? a * prob[c] : 0.0f) + m * e[c];
     }
-    sum = running_sums();
+    sum = row_sums();
   }
   if (!(sum > 0) || !std::isfinite(sum)) return false;
-  // prob_ and cdf_ stay unnormalized: sampling scales u by the total, pdf() multiplies by its inverse.
+  // prob_ and the row sums stay unnormalized: sampling scales u by the total, pdf() multiplies by its
+  // inverse.
   total_ = sum;
   inv_total_ = 1.0f / sum;
   valid_ = true;
   return true;
 }
 
-float ProductSampler::running_sums() {
-  // Row by row (rows are independent chains of T adds, which the CPU overlaps), then the row totals:
-  // a T x T table needs no running sum longer than T.
+float ProductSampler::row_sums() {
+  // Only the T row totals and their running sums: a sample finds its row among them and then scans
+  // the T cells of that row (sample_row_scan), so prepare() writes no per-cell running sums. Four
+  // partial sums per row keep the adds independent.
   const int T = table_->top_resolution();
   const float* prob = prob_.data();
-  float* cdf = cdf_.data();
   float run = 0;
   for (int r = 0; r < T; ++r) {
-    float acc = 0;
-    for (int k = 0; k < T; ++k) cdf[r * T + k] = acc += prob[r * T + k];
-    row_cdf_[r] = run += acc;
+    const float* row = prob + r * T;
+    float a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    int k = 0;
+    for (; k + 4 <= T; k += 4) {
+      a0 += row[k];
+      a1 += row[k + 1];
+      a2 += row[k + 2];
+      a3 += row[k + 3];
+    }
+    for (; k < T; ++k) a0 += row[k];
+    const float sum = (a0 + a1) + (a2 + a3);
+    row_sum_[r] = sum;
+    row_cdf_[r] = run += sum;
   }
   return run;
 }
@@ -77,7 +88,8 @@ DirectionSample ProductSampler::sample(Point2 u) const {
   DirectionSample out;
   if (!valid_) return out;
   const int T = table_->top_resolution();
-  const detail::Flat2DSample s = detail::sample_rows2d(row_cdf_.data(), cdf_.data(), T, T, u, total_);
+  const detail::Flat2DSample s =
+      detail::sample_row_scan(row_cdf_.data(), row_sum_.data(), prob_.data(), T, T, u, total_);
   const int c = s.y * T + s.x;
   float pc;
   bool interior;

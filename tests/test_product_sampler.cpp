@@ -164,8 +164,10 @@ TEST(ProductSampler, SimdWeightsEqualScalarReference) {
       }
       for (int i = 0; i < table->cell_count(); ++i) {
         const double r = ref[i] / sum;
-        ASSERT_NEAR(simd.cell_probability(i), scalar.cell_probability(i), 1e-5 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
-        ASSERT_NEAR(simd.cell_probability(i), r, 1e-4 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
+        // The SIMD kernels use the hardware's square root and reciprocal estimates (relative error
+        // < 3.7e-4 each, src/simd_ops.h); the scalar kernel is exact.
+        ASSERT_NEAR(simd.cell_probability(i), scalar.cell_probability(i), 2e-3 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
+        ASSERT_NEAR(scalar.cell_probability(i), r, 1e-4 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
       }
     }
   }

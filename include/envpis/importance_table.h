@@ -115,7 +115,8 @@ class ImportanceTable {
   std::vector<float> cdf_;   // N^2 running sums inside each cell (row-major), normalized to end at 1
   std::vector<float> cell_sum_;   // per cell: sum of func_ over the cell
   std::vector<float> cell_prob_;  // per cell: E[c]
-  std::vector<float> top_cdf_;    // running sums of E[c] (row-major), for environment-only sampling
+  std::vector<float> top_row_sum_;  // T: row totals of E[c], for environment-only sampling
+  std::vector<float> top_row_cdf_;  // T: their running sums
   std::vector<Cone> cones_;
   std::vector<float> soa_[6];
 };

@@ -59,14 +59,14 @@ class ProductSampler {
   const ProductSamplerOptions& options() const { return options_; }
 
  private:
-  float running_sums();  // fills cdf_ and row_cdf_ from prob_, returns the total
+  float row_sums();  // fills row_sum_ and row_cdf_ from prob_, returns the total
 
   const ImportanceTable* table_;
   ProductSamplerOptions options_;
   const void* kernels_;  // detail::Kernels
   PreparedProxy prepared_;
   std::vector<float> prob_;  // padded T^2: product weights (unnormalized)
-  std::vector<float> cdf_;      // T^2: running sums of prob_ inside each row
+  std::vector<float> row_sum_;  // T: each row's total of prob_
   std::vector<float> row_cdf_;  // T: running sums of the row totals
   float total_ = 0, inv_total_ = 0;
   bool valid_ = false;
