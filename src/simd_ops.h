@@ -87,12 +87,11 @@ ENVPIS_INLINE VF<A> rcp_estimate(VF<A> x) {
 #endif
   return VF<A>(1.0f) / x;
 }
-/// sqrt(x) for x >= 0 (0 for x below 1e-30).
+/// sqrt(x) for x >= 0: x / sqrt(x), with the estimate taken at max(x, 1e-30) so that x = 0 gives
+/// 0 * 1e15 = 0 rather than 0 * inf.
 template <class A>
 ENVPIS_INLINE VF<A> vsqrt_fast(VF<A> x) {
-  const auto ok = x > VF<A>(1e-30f);
-  const VF<A> xs = select(ok, x, VF<A>(1.0f));
-  return select(ok, xs * rsqrt_estimate(xs), VF<A>(0.0f));
+  return x * rsqrt_estimate(vmax(x, VF<A>(1e-30f)));
 }
 /// 1 / x for x > 1e-30.
 template <class A>
