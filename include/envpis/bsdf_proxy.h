@@ -57,7 +57,9 @@ struct ProxyOptions {
 };
 
 /// The seven floats. Accumulate lobes with the add_* calls (weights are the lobes' albedos or any
-/// consistent measure of their energy; roughness and IOR become weight-averaged).
+/// consistent measure of their energy; roughness and IOR become weight-averaged). Leave out lobes
+/// whose directions a light sample can never use: e.g. on a closed object the lobes pointing inside
+/// it, where the object itself blocks every shadow ray (docs/proxy.md, "Closed surfaces").
 struct BsdfProxy {
   float diffuse = 0;
   float translucent = 0;
