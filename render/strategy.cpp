@@ -115,12 +115,17 @@ void LightSampler::prepare(const ShadingContext& sc) {
   const int k = static_cast<int>(std::lround(std::sqrt(double(oracle_.directions))));
   const int per_cell = k * k;
   const int cells = R * R;
-  // Cells to evaluate: positive environment importance, and (for reflection-only materials) a cone
-  // not entirely below the surface (angle(axis, n) >= 90 deg + half-angle <=> cos <= -sin(half-angle)).
+  // Directions below the surface carry nothing a light sample can use: for reflection-only materials
+  // (f = 0 there), and for closed surfaces, whose local -Z is the inside of the object: a shadow ray
+  // into it is always blocked (Material::set_closed_surface; the product proxy leaves out the same
+  // lobes, so the oracle stays the limit of the method under the same knowledge).
+  const bool skip_below = sc.opaque || sc.bsdf->closed_surface();
+  // Cells to evaluate: positive environment importance, and (when skipping below) a cone not
+  // entirely below the surface (angle(axis, n) >= 90 deg + half-angle <=> cos <= -sin(half-angle)).
   active_.clear();
   for (int c = 0; c < cells; ++c) {
     if (!(table_->cell_probability(c) > 0)) continue;
-    if (sc.opaque) {
+    if (skip_below) {
       const Cone& cone = table_->cell_cone(c);
       if (dot(cone.axis, sc.n) <= -cone.sin_half_angle) continue;
     }
@@ -147,7 +152,7 @@ void LightSampler::prepare(const ShadingContext& sc) {
     for (int s = 0; s < per_cell; ++s) {
       const Vec3 wi{dx_[base + s], dy_[base + s], dz_[base + s]};
       const Vec3 wl = sc.frame->to_local(wi);
-      if (sc.opaque && !(wl.z > 0)) continue;
+      if (skip_below && !(wl.z > 0)) continue;
       const Rgb f = sc.bsdf->eval(sc.wo_local, wl);
       acc += f.average() * std::fabs(wl.z);
     }
