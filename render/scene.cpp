@@ -165,16 +165,25 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
   return static_cast<int>(objects_.size()) - 1;
 }
 
-void Scene::commit() {
-  if (committed_) return;
-  if (!env_) throw Error("scene: no environment map");
-  if (objects_.empty()) throw Error("scene: no object");
-  // Closed-surface flags: transmissive materials used (only) by closed objects.
+void Scene::set_proxy_closed_surfaces(bool enable) {
+  proxy_closed_surfaces_ = enable;
+  if (committed_) update_closed_surface_flags();
+}
+
+// Closed-surface flags: transmissive materials used (only) by closed objects.
+void Scene::update_closed_surface_flags() {
   std::vector<char> closed(materials_.size(), 0), open(materials_.size(), 0);
   for (const ObjectInfo& o : objects_) (o.closed ? closed : open)[static_cast<std::size_t>(o.material)] = 1;
   for (std::size_t i = 0; i < materials_.size(); ++i)
     materials_[i].bsdf.set_closed_surface(proxy_closed_surfaces_ && materials_[i].transmissive && closed[i] &&
                                           !open[i]);
+}
+
+void Scene::commit() {
+  if (committed_) return;
+  if (!env_) throw Error("scene: no environment map");
+  if (objects_.empty()) throw Error("scene: no object");
+  update_closed_surface_flags();
   embree_ = std::make_unique<Embree>();
   embree_->device = rtcNewDevice(nullptr);
   if (!embree_->device) throw Error(std::string("embree: cannot create a device: ") + embree_error_name(rtcGetDeviceError(nullptr)));

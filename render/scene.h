@@ -97,9 +97,10 @@ class Scene {
   void set_environment_description(std::string d) { env_description_ = std::move(d); }
   const std::string& environment_description() const { return env_description_; }
 
-  /// Whether commit() marks transmissive materials used only by closed objects as closed surfaces
-  /// (default true; see above). Call before commit().
-  void set_proxy_closed_surfaces(bool enable) { proxy_closed_surfaces_ = enable; }
+  /// Whether transmissive materials used only by closed objects are marked as closed surfaces
+  /// (default true; see above). Before commit(), commit() applies it; after, the flags are updated
+  /// at once (they do not touch the acceleration structure). Not while rendering.
+  void set_proxy_closed_surfaces(bool enable);
   bool proxy_closed_surfaces() const { return proxy_closed_surfaces_; }
 
   /// Builds the Embree acceleration structure and sets each material's closed-surface flag. Throws
@@ -123,6 +124,7 @@ class Scene {
   std::shared_ptr<const EnvironmentMap> env_;
   std::string env_description_;
   bool proxy_closed_surfaces_ = true;
+  void update_closed_surface_flags();
   bool committed_ = false;
 };
 

@@ -393,6 +393,7 @@ TEST_F(BadInput, InvalidMapOptions) {
     cases.push_back({base + " --oracle-dirs 5", "--oracle-dirs: must be a square number"});
     cases.push_back({base + " --top 12.5", "--top: expected an integer in 1..256, got '12.5'"});
     cases.push_back({base + " --threads -2", "--threads: must be in 0..4096, got '-2'"});
+    cases.push_back({base + " --closed-surfaces maybe", "--closed-surfaces: expected on or off, got 'maybe'"});
   }
   cases.push_back({"table --env " + good + " --out " + shell_quote(path("out/opt-table")) + " --scale -1", "--scale: must be >= 0"});
   std::vector<std::string> args;

@@ -102,6 +102,8 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_EQ(m["width"], 64);
   EXPECT_EQ(m["height"], 12);
   EXPECT_EQ(m["reference"]["strategy"], "mis");
+  EXPECT_EQ(m["closed_surfaces"], true);
+  EXPECT_EQ(m["top_resolution"], 12);
   EXPECT_NE(m["reference"]["seed"], m["seed"]) << "the reference must use another seed";
   EXPECT_FALSE(m["reference"]["cached"].get<bool>());
   EXPECT_TRUE(m["plots"].is_null());

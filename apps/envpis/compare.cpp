@@ -647,6 +647,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["seed"] = ref_seed;
   if (ref_strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
   if (ref_strategy != Strategy::Bsdf && ref_strategy != Strategy::Oracle) key["top"] = base.top_resolution;
+  if ((ref_strategy == Strategy::Product || ref_strategy == Strategy::Oracle) && a.common.closed_surfaces == "off")
+    key["closed_surfaces"] = false;
   if (ref_strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha, base.product.env_mix};
   const std::string cache_dir = a.no_cache ? "" : (a.cache_dir.empty() ? default_cache_dir() : a.cache_dir);
@@ -875,6 +877,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
   j["top_resolution"] = base.top_resolution;
+  j["closed_surfaces"] = a.common.closed_surfaces == "on";
   if (!a.common.env.empty())
     j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", a.common.env_rotation)},
                                   {"scale", parse_number("--env-scale", a.common.env_scale)}};

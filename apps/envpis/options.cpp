@@ -94,12 +94,17 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--proxy-min-alpha", proxy_min_alpha,
                  "product: floor on the transformed proxy roughness, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
+  sub.add_option("--closed-surfaces", closed_surfaces,
+                 "product and oracle: leave out light samples into closed transmissive objects (on/off)")
+      ->type_name("on|off")
+      ->capture_default_str();
   sub.add_option("--env-mix", env_mix,
                  "product: fraction of environment-only sampling mixed in, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
 }
 
 void SceneOptionArgs::apply(RenderOptions& o) const {
+  closed_surfaces_enabled();
   o.integrator = parse_integrator(integrator);
   o.heuristic = parse_heuristic(heuristic);
   o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
@@ -122,6 +127,12 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
 }
 
+bool SceneOptionArgs::closed_surfaces_enabled() const {
+  if (closed_surfaces == "on") return true;
+  if (closed_surfaces == "off") return false;
+  throw Error("--closed-surfaces: expected on or off, got '" + closed_surfaces + "'");
+}
+
 EnvironmentMapOptions SceneOptionArgs::map_options() const {
   EnvironmentMapOptions mo;
   mo.rotation = Mat3::rotate_z(
@@ -140,14 +151,19 @@ Scene SceneOptionArgs::load_scene(const std::string& command, std::shared_ptr<co
       std::fprintf(stderr, "envpis %s: warning: %s\n", command.c_str(), w.c_str());
   }
   if (env_out) *env_out = map;
-  if (is_builtin_scene(scene)) return make_builtin_scene(scene, map);
-  std::error_code ec;
-  if (!fs::is_regular_file(scene, ec)) {
-    if (scene.find('/') != std::string::npos || scene.find('.') != std::string::npos)
-      throw Error("scene file '" + scene + "' does not exist");
-    throw Error("unknown scene '" + scene + "' (built-in scenes: fig1, fig5; or a .json scene file)");
-  }
-  return load_scene_file(scene, map);
+  const bool closed = closed_surfaces_enabled();
+  Scene sc = [&] {
+    if (is_builtin_scene(scene)) return make_builtin_scene(scene, map);
+    std::error_code ec;
+    if (!fs::is_regular_file(scene, ec)) {
+      if (scene.find('/') != std::string::npos || scene.find('.') != std::string::npos)
+        throw Error("scene file '" + scene + "' does not exist");
+      throw Error("unknown scene '" + scene + "' (built-in scenes: fig1, fig5; or a .json scene file)");
+    }
+    return load_scene_file(scene, map);
+  }();
+  sc.set_proxy_closed_surfaces(closed);
+  return sc;
 }
 
 #endif  // ENVPIS_HAVE_RENDER

@@ -41,19 +41,24 @@ struct SceneOptionArgs {
   std::string top = "12";
   std::string oracle_res = "64", oracle_dirs = "4";
   std::string proxy_transform, proxy_min_alpha, env_mix;  // empty: the library's defaults
+  std::string closed_surfaces = "on";
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
 
   /// --scene, --env, --env-rotation, --env-scale.
   void add_scene_options(CLI::App& sub);
-  /// --integrator, --heuristic, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix.
+  /// --integrator, --heuristic, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix,
+  /// --closed-surfaces.
   void add_sampling_options(CLI::App& sub);
   /// Parses the sampling options into `o` (throws Error naming the option).
   void apply(render::RenderOptions& o) const;
   /// Checks --env-rotation / --env-scale (throws Error naming the option).
   EnvironmentMapOptions map_options() const;
+  /// --closed-surfaces as a bool (throws Error unless on or off).
+  bool closed_surfaces_enabled() const;
   /// Loads --env (if given; its warnings go to stderr as "envpis COMMAND: warning: ...") and the scene
-  /// (built-in or JSON file). `env` receives the loaded map, null without --env.
+  /// (built-in or JSON file), with --closed-surfaces applied. `env` receives the loaded map, null
+  /// without --env.
   render::Scene load_scene(const std::string& command, std::shared_ptr<const EnvironmentMap>* env) const;
 };
 #endif
