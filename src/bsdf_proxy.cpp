@@ -108,8 +108,11 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
     at_t = slides_t ? at * (cos_t + eta * cos_o) / std::max(cos_t, 1e-4f)
                     : at * (cos_t * eta + cos_o) / std::sqrt(std::max(cos_t * eta * eta, 1e-8f));
   const float floor = std::max(options.min_alpha, 1e-3f);
-  p.alpha_r = std::clamp(ar_t, floor, 1.0f);
-  p.alpha_t = std::clamp(at_t, floor, 1.0f);
+  float cap = options.max_alpha;
+  if (!(cap <= 1.0f)) cap = 1.0f;  // NaN or above 1
+  cap = std::max(cap, floor);      // a cap below the floor gives way to the floor
+  p.alpha_r = std::clamp(ar_t, floor, cap);
+  p.alpha_t = std::clamp(at_t, floor, cap);
   p.kd = wd * kInvPi;
   p.kt = wt_diffuse * kInvPi;
   p.wr = wr;

@@ -127,14 +127,26 @@ TEST(BsdfProxy, AxesAndSpecialCases) {
   EXPECT_FLOAT_EQ(pp.wt, 0.0f);
   EXPECT_FLOAT_EQ(pp.wr, 2.0f);
   EXPECT_NEAR(pp.eta, 1 / 1.5f, 1e-6f);
-  // Roughness 0 and the floor; roughness 1 capped at 1.
+  // Roughness 0 and the floor; roughness 1 capped at max_alpha (default 0.8), at most 1.
   BsdfProxy mirror;
   mirror.add_reflection(1, 0);
   EXPECT_NEAR(prepare_proxy(mirror, n, wo).alpha_r, 0.35f, 1e-6f);
   EXPECT_NEAR(prepare_proxy(mirror, n, wo, none).alpha_r, 1e-3f, 1e-6f);
   BsdfProxy rough;
   rough.add_reflection(1, 1);
-  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo).alpha_r, 1.0f);
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo).alpha_r, 0.8f);
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo, none).alpha_r, 0.8f);
+  ProxyOptions uncapped;
+  uncapped.max_alpha = 1.0f;
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo, uncapped).alpha_r, 1.0f);
+  uncapped.max_alpha = 7.0f;  // above 1: 1
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo, uncapped).alpha_r, 1.0f);
+  uncapped.max_alpha = std::nanf("");  // invalid: 1
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo, uncapped).alpha_r, 1.0f);
+  ProxyOptions low_cap;
+  low_cap.max_alpha = 0.1f;  // below the floor (0.35): the floor wins
+  EXPECT_FLOAT_EQ(prepare_proxy(rough, n, wo, low_cap).alpha_r, 0.35f);
+  EXPECT_FLOAT_EQ(prepare_proxy(mirror, n, wo, low_cap).alpha_r, 0.35f);
   // Invalid inputs.
   EXPECT_FALSE(prepare_proxy(BsdfProxy{}, n, wo).valid());
   EXPECT_FALSE(prepare_proxy(p, {0, 0, 0}, wo).valid());

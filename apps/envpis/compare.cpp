@@ -650,7 +650,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if ((ref_strategy == Strategy::Product || ref_strategy == Strategy::Oracle) && a.common.closed_surfaces == "off")
     key["closed_surfaces"] = false;
   if (ref_strategy == Strategy::Product)
-    key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha, base.product.env_mix};
+    key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
+                      base.product.proxy.max_alpha, base.product.env_mix};
   const std::string cache_dir = a.no_cache ? "" : (a.cache_dir.empty() ? default_cache_dir() : a.cache_dir);
   std::optional<Reference> ref_opt;
   if (!cache_dir.empty()) ref_opt = load_cached_reference(cache_dir, key);
@@ -873,6 +874,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["efficiency_definition"] = "1 / (relmse * seconds), seconds = wall time of the sampling loop";
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
+                          {"proxy_max_alpha", base.product.proxy.max_alpha},
                           {"env_mix", base.product.env_mix}};
   if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};

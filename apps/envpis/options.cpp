@@ -98,6 +98,9 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product and oracle: leave out light samples into closed transmissive objects (on/off)")
       ->type_name("on|off")
       ->capture_default_str();
+  sub.add_option("--proxy-max-alpha", proxy_max_alpha,
+                 "product: cap on the transformed proxy roughness, [0, 1] (default: the library's)")
+      ->type_name("FLOAT");
   sub.add_option("--env-mix", env_mix,
                  "product: fraction of environment-only sampling mixed in, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
@@ -124,6 +127,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   }
   if (!proxy_min_alpha.empty())
     o.product.proxy.min_alpha = static_cast<float>(parse_number_in("--proxy-min-alpha", proxy_min_alpha, 0, 1, "in [0, 1]"));
+  if (!proxy_max_alpha.empty())
+    o.product.proxy.max_alpha = static_cast<float>(parse_number_in("--proxy-max-alpha", proxy_max_alpha, 0, 1, "in [0, 1]"));
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
 }
 

@@ -40,7 +40,7 @@ struct SceneOptionArgs {
   std::string threads = "0";
   std::string top = "12";
   std::string oracle_res = "64", oracle_dirs = "4";
-  std::string proxy_transform, proxy_min_alpha, env_mix;  // empty: the library's defaults
+  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix;  // empty: the library's defaults
   std::string closed_surfaces = "on";
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}

@@ -48,7 +48,7 @@ struct TableArgs {
   std::string top = "12", fine = "0";
   std::string normal = "0,0,1", wo = "1,0,1";
   std::string proxy;  // empty: reflection=1, alpha_r=0.2
-  std::string transform, min_alpha, env_mix = "0";
+  std::string transform, min_alpha, max_alpha, env_mix = "0";
   std::string samples = "1000", seed = "1";
 };
 
@@ -359,6 +359,8 @@ void run_table(const TableArgs& a) {
     sampler_options.proxy.transform = with_option("--transform", [&] { return parse_roughness_transform(a.transform); });
   if (!a.min_alpha.empty())
     sampler_options.proxy.min_alpha = float(parse_number_in("--min-alpha", a.min_alpha, 0, 1, "in [0, 1]"));
+  if (!a.max_alpha.empty())
+    sampler_options.proxy.max_alpha = float(parse_number_in("--max-alpha", a.max_alpha, 0, 1, "in [0, 1]"));
   sampler_options.env_mix = float(parse_number_in("--env-mix", a.env_mix, 0, 1, "in [0, 1]"));
   const long long samples = parse_integer("--samples", a.samples, 1, 10000000);
   const unsigned long long seed = static_cast<unsigned long long>(parse_integer("--seed", a.seed, 0, 1LL << 62));
@@ -413,8 +415,9 @@ void run_table(const TableArgs& a) {
   std::printf("proxy:   diffuse=%g translucent=%g reflection=%g refraction=%g alpha_r=%g alpha_t=%g ior=%g\n",
               double(proxy.diffuse), double(proxy.translucent), double(proxy.reflection), double(proxy.refraction),
               double(proxy.alpha_reflection), double(proxy.alpha_refraction), double(proxy.ior));
-  std::printf("         transform %s, min-alpha %g -> alpha_r' %.4g alpha_t' %.4g eta %.4g%s\n",
+  std::printf("         transform %s, min-alpha %g, max-alpha %g -> alpha_r' %.4g alpha_t' %.4g eta %.4g%s\n",
               to_string(sampler_options.proxy.transform), double(sampler_options.proxy.min_alpha),
+              double(sampler_options.proxy.max_alpha),
               double(pp.alpha_r), double(pp.alpha_t), double(pp.eta), pp.tir ? " (total internal reflection)" : "");
   if (sampler.uses_environment_fallback())
     std::fprintf(stderr,
@@ -524,6 +527,7 @@ void run_table(const TableArgs& a) {
         {"ior", proxy.ior}}},
       {"transform", to_string(sampler_options.proxy.transform)},
       {"min_alpha", sampler_options.proxy.min_alpha},
+      {"max_alpha", sampler_options.proxy.max_alpha},
       {"env_mix", sampler_options.env_mix},
       {"prepared",
        {{"alpha_r", pp.alpha_r}, {"alpha_t", pp.alpha_t}, {"eta", pp.eta}, {"tir", pp.tir},
@@ -574,6 +578,9 @@ const RegisterCommand kTable{Command{
                                                   "library's)")
           ->type_name("NAME");
       sub.add_option("--min-alpha", a->min_alpha, "Floor on the transformed roughness, [0,1] (default: the "
+                                                  "library's)")
+          ->type_name("A");
+      sub.add_option("--max-alpha", a->max_alpha, "Cap on the transformed roughness, [0,1] (default: the "
                                                   "library's)")
           ->type_name("A");
       sub.add_option("--env-mix", a->env_mix, "Fraction of environment-only sampling mixed in, [0,1] (default 0)")
