@@ -174,6 +174,17 @@ void expect_one_line_error(const std::string& cmd, const std::string& args, cons
   EXPECT_EQ(r.output, line) << args << ": more than the one error line";
 }
 
+// Runs every (command line, expected text) at once; each must be a one-line error of its command.
+void expect_one_line_errors(const std::vector<std::pair<std::string, std::string>>& cases) {
+  std::vector<std::string> args;
+  for (const auto& c : cases) args.push_back(c.first);
+  const std::vector<CmdResult> r = run_envpis_all(args);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string cmd = cases[i].first.substr(0, cases[i].first.find(' '));
+    expect_one_line_error(cmd, args[i], r[i], cases[i].second);
+  }
+}
+
 bool all_finite_nonnegative(const std::vector<float>& v) {
   for (float x : v)
     if (!std::isfinite(x) || x < 0) return false;
@@ -368,13 +379,7 @@ TEST_F(BadInput, UnwritableOutputs) {
       {"compare --env " + good + " --out " + shell_quote(path("good.exr")), "exists and is not a directory"},
       {"compare --env " + good + " --out /proc/envpis-no", "--out '/proc/envpis-no'"},
   };
-  std::vector<std::string> args;
-  for (const auto& c : cases) args.push_back(c.first);
-  const std::vector<CmdResult> r = run_envpis_all(args);
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const std::string cmd = cases[i].first.substr(0, cases[i].first.find(' '));
-    expect_one_line_error(cmd, args[i], r[i], cases[i].second);
-  }
+  expect_one_line_errors(cases);
 }
 
 // Invalid values of the options every map-reading command shares.
@@ -389,6 +394,7 @@ TEST_F(BadInput, InvalidMapOptions) {
     cases.push_back({base + " --env-rotation inf", "--env-rotation: expected a finite number"});
     cases.push_back({base + " --env-mix 2", "--env-mix: must be in [0, 1], got '2'"});
     cases.push_back({base + " --proxy-min-alpha -0.5", "--proxy-min-alpha: must be in [0, 1]"});
+    cases.push_back({base + " --proxy-max-alpha 1.5", "--proxy-max-alpha: must be in [0, 1], got '1.5'"});
     cases.push_back({base + " --proxy-transform wide", "--proxy-transform: unknown roughness transform 'wide'"});
     cases.push_back({base + " --oracle-dirs 5", "--oracle-dirs: must be a square number"});
     cases.push_back({base + " --top 12.5", "--top: expected an integer in 1..256, got '12.5'"});
@@ -396,13 +402,8 @@ TEST_F(BadInput, InvalidMapOptions) {
     cases.push_back({base + " --closed-surfaces maybe", "--closed-surfaces: expected on or off, got 'maybe'"});
   }
   cases.push_back({"table --env " + good + " --out " + shell_quote(path("out/opt-table")) + " --scale -1", "--scale: must be >= 0"});
-  std::vector<std::string> args;
-  for (const auto& c : cases) args.push_back(c.first);
-  const std::vector<CmdResult> r = run_envpis_all(args);
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const std::string cmd = cases[i].first.substr(0, cases[i].first.find(' '));
-    expect_one_line_error(cmd, args[i], r[i], cases[i].second);
-  }
+  cases.push_back({"table --env " + good + " --out " + shell_quote(path("out/opt-table")) + " --max-alpha x", "--max-alpha: expected a finite number, got 'x'"});
+  expect_one_line_errors(cases);
 }
 
 }  // namespace
