@@ -613,6 +613,8 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
       f.fail_at(f.sub("type"), "unknown object type '" + type + "' (expected sphere, mesh, torus-knot or quad)");
     }
   }
+  // Closed-surface proxy (docs/proxy.md): on unless the file says otherwise.
+  s.set_proxy_closed_surfaces(top.boolean("closed_surfaces", true));
   top.finish();
   s.commit();
   return s;

@@ -647,7 +647,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["seed"] = ref_seed;
   if (ref_strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
   if (ref_strategy != Strategy::Bsdf && ref_strategy != Strategy::Oracle) key["top"] = base.top_resolution;
-  if ((ref_strategy == Strategy::Product || ref_strategy == Strategy::Oracle) && a.common.closed_surfaces == "off")
+  if ((ref_strategy == Strategy::Product || ref_strategy == Strategy::Oracle) && !scene.proxy_closed_surfaces())
     key["closed_surfaces"] = false;
   if (ref_strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
@@ -879,7 +879,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
   j["top_resolution"] = base.top_resolution;
-  j["closed_surfaces"] = a.common.closed_surfaces == "on";
+  j["closed_surfaces"] = scene.proxy_closed_surfaces();
   if (!a.common.env.empty())
     j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", a.common.env_rotation)},
                                   {"scale", parse_number("--env-scale", a.common.env_scale)}};

@@ -95,9 +95,9 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product: floor on the transformed proxy roughness, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
   sub.add_option("--closed-surfaces", closed_surfaces,
-                 "product and oracle: leave out light samples into closed transmissive objects (on/off)")
-      ->type_name("on|off")
-      ->capture_default_str();
+                 "product and oracle: leave out light samples into closed transmissive objects (default: the "
+                 "scene's, on unless a scene file says \"closed_surfaces\": false)")
+      ->type_name("on|off");
   sub.add_option("--proxy-max-alpha", proxy_max_alpha,
                  "product: cap on the transformed proxy roughness, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
@@ -107,7 +107,7 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
 }
 
 void SceneOptionArgs::apply(RenderOptions& o) const {
-  closed_surfaces_enabled();
+  closed_surfaces_override();
   o.integrator = parse_integrator(integrator);
   o.heuristic = parse_heuristic(heuristic);
   o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
@@ -132,9 +132,10 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
 }
 
-bool SceneOptionArgs::closed_surfaces_enabled() const {
-  if (closed_surfaces == "on") return true;
-  if (closed_surfaces == "off") return false;
+int SceneOptionArgs::closed_surfaces_override() const {
+  if (closed_surfaces.empty()) return -1;
+  if (closed_surfaces == "on") return 1;
+  if (closed_surfaces == "off") return 0;
   throw Error("--closed-surfaces: expected on or off, got '" + closed_surfaces + "'");
 }
 
@@ -156,7 +157,7 @@ Scene SceneOptionArgs::load_scene(const std::string& command, std::shared_ptr<co
       std::fprintf(stderr, "envpis %s: warning: %s\n", command.c_str(), w.c_str());
   }
   if (env_out) *env_out = map;
-  const bool closed = closed_surfaces_enabled();
+  const int closed = closed_surfaces_override();
   Scene sc = [&] {
     if (is_builtin_scene(scene)) return make_builtin_scene(scene, map);
     std::error_code ec;
@@ -167,7 +168,7 @@ Scene SceneOptionArgs::load_scene(const std::string& command, std::shared_ptr<co
     }
     return load_scene_file(scene, map);
   }();
-  sc.set_proxy_closed_surfaces(closed);
+  if (closed >= 0) sc.set_proxy_closed_surfaces(closed == 1);
   return sc;
 }
 

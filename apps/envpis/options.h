@@ -41,7 +41,7 @@ struct SceneOptionArgs {
   std::string top = "12";
   std::string oracle_res = "64", oracle_dirs = "4";
   std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix;  // empty: the library's defaults
-  std::string closed_surfaces = "on";
+  std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
 
@@ -54,8 +54,9 @@ struct SceneOptionArgs {
   void apply(render::RenderOptions& o) const;
   /// Checks --env-rotation / --env-scale (throws Error naming the option).
   EnvironmentMapOptions map_options() const;
-  /// --closed-surfaces as a bool (throws Error unless on or off).
-  bool closed_surfaces_enabled() const;
+  /// --closed-surfaces: -1 for the scene's setting (not given), else 0 (off) or 1 (on); throws Error
+  /// for any other value.
+  int closed_surfaces_override() const;
   /// Loads --env (if given; its warnings go to stderr as "envpis COMMAND: warning: ...") and the scene
   /// (built-in or JSON file), with --closed-surfaces applied. `env` receives the loaded map, null
   /// without --env.

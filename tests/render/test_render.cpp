@@ -488,6 +488,30 @@ std::string load_error(const std::string& text, const TempDir& dir) {
   return "";
 }
 
+// "closed_surfaces": false in a scene file turns the closed-surface proxy off; the default is on, and
+// Scene::set_proxy_closed_surfaces switches it after commit() too (what --closed-surfaces does).
+TEST(SceneFile, ClosedSurfacesSwitch) {
+  TempDir dir;
+  const std::string sphere = R"({"type": "sphere", "center": [0, 0, 1], "radius": 1, "material": "glass"})";
+  std::string off = scene_json(sphere);
+  off.insert(off.find('{') + 1, R"("closed_surfaces": false,)");
+  Scene on_scene = load_scene_file(dir.write("on.json", scene_json(sphere)));
+  Scene off_scene = load_scene_file(dir.write("off.json", off));
+  const int glass = on_scene.find_material("glass");
+  ASSERT_GE(glass, 0);
+  EXPECT_TRUE(on_scene.proxy_closed_surfaces());
+  EXPECT_TRUE(on_scene.material(glass).bsdf.closed_surface());
+  EXPECT_FALSE(off_scene.proxy_closed_surfaces());
+  EXPECT_FALSE(off_scene.material(off_scene.find_material("glass")).bsdf.closed_surface());
+  on_scene.set_proxy_closed_surfaces(false);
+  EXPECT_FALSE(on_scene.material(glass).bsdf.closed_surface());
+  on_scene.set_proxy_closed_surfaces(true);
+  EXPECT_TRUE(on_scene.material(glass).bsdf.closed_surface());
+  std::string bad = scene_json(sphere);
+  bad.insert(bad.find('{') + 1, R"("closed_surfaces": "yes",)");
+  EXPECT_THROW(load_scene_file(dir.write("bad.json", bad)), Error);
+}
+
 TEST(SceneFile, CleanErrorsForBadFilesAndFields) {
   TempDir dir;
   dir.write("quad.obj", kObj);
