@@ -101,7 +101,11 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
 
   // Roughness transform (half-vector -> incoming direction).
   const bool slides_r = options.transform != RoughnessTransform::Abstract;
-  const bool slides_t = options.transform == RoughnessTransform::Slides;
+  // Hybrid: for refraction the abstract's a_t' when entering a denser medium (eta > 1), the slides'
+  // when leaving one (eta < 1, e.g. inside glass), each where it covered the true lobe better
+  // (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes; docs/proxy.md).
+  const bool slides_t = options.transform == RoughnessTransform::Slides ||
+                        (options.transform == RoughnessTransform::Hybrid && eta < 1.0f);
   const float ar_t = slides_r ? 2.0f * ar : ar * std::sqrt(4.0f * cos_o);
   float at_t = 1.0f;
   if (wt > 0)

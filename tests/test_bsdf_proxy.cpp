@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <random>
+#include <vector>
 
 #include "test_util.h"
 
@@ -179,19 +181,23 @@ TEST(BsdfProxy, ProxyLobesCoverTheTrueGgxLobes) {
   double worst_uncovered_default = 0;
   int count = 0;
   std::printf("%-8s %-5s %-6s | %-21s | %-21s\n", "lobe", "alpha", "theta", "slides unc / var", "abstract unc / var");
-  for (int lobe = 0; lobe < 2; ++lobe)
+  // Lobes: 0 reflection, 1 refraction into glass (eta 1.5), 2 refraction out of glass (eta 1/1.5,
+  // view angles below the 41.8 degree critical angle).
+  const char* lobe_name[3] = {"reflect", "refr-in", "refr-out"};
+  for (int lobe = 0; lobe < 3; ++lobe)
     for (float a : {0.05f, 0.1f, 0.2f, 0.3f, 0.5f})
-      for (float theta_deg : {0.0f, 30.0f, 60.0f, 80.0f}) {
+      for (float theta_deg : lobe == 2 ? std::vector<float>{0.0f, 20.0f, 30.0f, 38.0f} : std::vector<float>{0.0f, 30.0f, 60.0f, 80.0f}) {
         const float th = theta_deg * kPi / 180;
         const Vec3 wo{std::sin(th), 0, std::cos(th)};
+        const float ior = lobe == 2 ? 1.0f / 1.5f : 1.5f;
         BsdfProxy p;
         std::function<double(Vec3)> f;
         if (lobe == 0) {
           p.add_reflection(1, a);
           f = [&](Vec3 wi) { return ggx_reflect_cos(wo, wi, a); };
         } else {
-          p.add_refraction(1, a, 1.5f);
-          f = [&](Vec3 wi) { return ggx_refract_cos(wo, wi, a, 1.5); };
+          p.add_refraction(1, a, ior);
+          f = [&, ior](Vec3 wi) { return ggx_refract_cos(wo, wi, a, ior); };
         }
         Coverage cov[3][2];
         for (int t = 0; t < 3; ++t)
@@ -205,10 +211,10 @@ TEST(BsdfProxy, ProxyLobesCoverTheTrueGgxLobes) {
           }
         ++count;
         worst_uncovered_default = std::max(worst_uncovered_default, cov[2][1].uncovered);
-        std::printf("%-8s %-5.2f %-6.0f | %8.4f / %9.3f | %8.4f / %9.3f\n", lobe ? "refract" : "reflect", a, theta_deg,
+        std::printf("%-8s %-5.2f %-6.0f | %8.4f / %9.3f | %8.4f / %9.3f\n", lobe_name[lobe], a, theta_deg,
                     cov[0][0].uncovered, cov[0][0].variance, cov[1][0].uncovered, cov[1][0].variance);
         // With the default options, little true mass may sit in cells the proxy rates near zero.
-        EXPECT_LT(cov[2][1].uncovered, 0.02) << (lobe ? "refract" : "reflect") << " a=" << a << " theta=" << theta_deg;
+        EXPECT_LT(cov[2][1].uncovered, 0.02) << lobe_name[lobe] << " a=" << a << " theta=" << theta_deg;
       }
   double gm[3][2];
   for (int t = 0; t < 3; ++t)

@@ -21,11 +21,12 @@
 // change of variables widens the lobe). The talk's abstract and the authors' slides differ:
 //   Slides:             a_r' = 2 a_r,               a_t' = a_t (cos_t + eta cos_o) / cos_t
 //   Abstract:           a_r' = a_r sqrt(4 cos_o),   a_t' = a_t (cos_t eta + cos_o) / sqrt(cos_t eta^2)
-//   Hybrid (default):   the slides' a_r' and the abstract's a_t'
+//   Hybrid (default):   the slides' a_r'; the abstract's a_t' for eta > 1, the slides' for eta < 1
 // where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is what
 // measured best (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes; docs/proxy.md): for
 // reflection the abstract's a_r' is far too narrow at grazing views (4x the cell-level variance at 80
-// degrees), for refraction the slides' a_t' is about twice too wide. Then a' is clamped to
+// degrees); for refraction into a denser medium the slides' a_t' is about twice too wide, out of one
+// the abstract's is about twice too narrow. Then a' is clamped to
 // [min_alpha, max_alpha]: the floor is the low-roughness remedy of DESIGN.md section 8 (a near-mirror
 // lobe gives its peak value to every cell its axis touches and starves the cells reached only by its
 // tail); the cap keeps rough lobes peaked: at a' = 1 the GGX-like shape is flat (and above 1 it would
