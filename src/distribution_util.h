@@ -52,6 +52,28 @@ inline Flat2DSample sample_split2d(const float* split, int w, int h, Point2 u) {
   return s;
 }
 
+/// The row totals of a w x h table of masses (row-major) and their running sums, the layout
+/// sample_row_scan() reads; returns the total. Four partial sums per row keep the adds independent
+/// (the product sampler calls this per shading point).
+inline float store_row_sums(const float* mass, int w, int h, float* row_sum, float* row_cdf) {
+  float run = 0;
+  for (int r = 0; r < h; ++r) {
+    const float* row = mass + static_cast<std::size_t>(r) * w;
+    float a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    int k = 0;
+    for (; k + 4 <= w; k += 4) {
+      a0 += row[k];
+      a1 += row[k + 1];
+      a2 += row[k + 2];
+      a3 += row[k + 3];
+    }
+    for (; k < w; ++k) a0 += row[k];
+    row_sum[r] = (a0 + a1) + (a2 + a3);
+    row_cdf[r] = run += row_sum[r];
+  }
+  return run;
+}
+
 /// A w x h table of masses `mass` (row-major) with its row totals `row_sum` and their running sums
 /// `rows` (h entries, the last being `total`): the row with u.y (binary search), then the column with
 /// u.x by a linear scan of that row's masses (no per-cell running sums are needed).

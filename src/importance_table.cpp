@@ -335,13 +335,7 @@ void ImportanceTable::build_cells() {
   // search as the product sampler's: a row, then a scan of its cells).
   top_row_sum_.assign(T_, 0.0f);
   top_row_cdf_.assign(T_, 0.0f);
-  double run = 0;
-  for (int r = 0; r < T_; ++r) {
-    double row = 0;
-    for (int k = 0; k < T_; ++k) row += cell_prob_[r * T_ + k];
-    top_row_sum_[r] = static_cast<float>(row);
-    top_row_cdf_[r] = static_cast<float>(run += row);
-  }
+  detail::store_row_sums(cell_prob_.data(), T_, T_, top_row_sum_.data(), top_row_cdf_.data());
   padded_ = (cells + 15) / 16 * 16;
   for (auto& a : soa_) a.assign(padded_, 0.0f);
   for (int c = 0; c < cells; ++c) soa_[5][c] = cell_prob_[c];

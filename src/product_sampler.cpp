@@ -61,27 +61,9 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
 
 float ProductSampler::row_sums() {
   // Only the T row totals and their running sums: a sample finds its row among them and then scans
-  // the T cells of that row (sample_row_scan), so prepare() writes no per-cell running sums. Four
-  // partial sums per row keep the adds independent.
+  // the T cells of that row (sample_row_scan), so prepare() writes no per-cell running sums.
   const int T = table_->top_resolution();
-  const float* prob = prob_.data();
-  float run = 0;
-  for (int r = 0; r < T; ++r) {
-    const float* row = prob + r * T;
-    float a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-    int k = 0;
-    for (; k + 4 <= T; k += 4) {
-      a0 += row[k];
-      a1 += row[k + 1];
-      a2 += row[k + 2];
-      a3 += row[k + 3];
-    }
-    for (; k < T; ++k) a0 += row[k];
-    const float sum = (a0 + a1) + (a2 + a3);
-    row_sum_[r] = sum;
-    row_cdf_[r] = run += sum;
-  }
-  return run;
+  return detail::store_row_sums(prob_.data(), T, T, row_sum_.data(), row_cdf_.data());
 }
 
 DirectionSample ProductSampler::sample(Point2 u) const {
