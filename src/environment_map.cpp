@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <new>
+#include <sstream>
 #include <system_error>
 
 #include "envpis/equal_area.h"
@@ -50,23 +51,14 @@ std::string format_from_content(const unsigned char* b, std::size_t n) {
 // ("openexr:exr,sxr,mxr;hdr:hdr,rgbe;..."); empty when none.
 std::string format_from_extension(const std::string& ext) {
   if (ext.empty()) return {};
-  const std::string list = OIIO::get_string_attribute("extension_list");
-  std::size_t pos = 0;
-  while (pos < list.size()) {
-    std::size_t end = list.find(';', pos);
-    if (end == std::string::npos) end = list.size();
-    const std::string entry = list.substr(pos, end - pos);
+  std::istringstream entries(OIIO::get_string_attribute("extension_list"));
+  std::string entry, e;
+  while (std::getline(entries, entry, ';')) {
     const std::size_t colon = entry.find(':');
-    if (colon != std::string::npos) {
-      std::size_t p = colon + 1;
-      while (p <= entry.size()) {
-        std::size_t q = entry.find(',', p);
-        if (q == std::string::npos) q = entry.size();
-        if (entry.compare(p, q - p, ext) == 0) return entry.substr(0, colon);
-        p = q + 1;
-      }
-    }
-    pos = end + 1;
+    if (colon == std::string::npos) continue;
+    std::istringstream extensions(entry.substr(colon + 1));
+    while (std::getline(extensions, e, ','))
+      if (e == ext) return entry.substr(0, colon);
   }
   return {};
 }
