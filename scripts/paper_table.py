@@ -57,33 +57,30 @@ def region_relerr(block, strategy):
     return None
 
 
-def ratio_relerr(runs, block_key, num, den):
-    """{map: {region: relative standard error of relMSE(num) / relMSE(den)}} (errors taken independent)."""
+def paired_regions(runs, block_key, num, den, per_region, combine):
+    """{map: {region: combine(num's value, den's value)}}: `per_region(block, strategy)` gives a
+    strategy's {region: value} (None when absent); maps lacking either strategy are left out."""
     out = {}
     for name, m in runs:
         block = m.get(block_key)
         if not block:
             continue
-        a, b = region_relerr(block, num), region_relerr(block, den)
+        a, b = per_region(block, num), per_region(block, den)
         if a is None or b is None:
             continue
-        out[name] = {r: math.sqrt(a[r] ** 2 + b[r] ** 2) for r in a}
+        out[name] = {r: combine(a[r], b.get(r)) for r in a}
     return out
+
+
+def ratio_relerr(runs, block_key, num, den):
+    """{map: {region: relative standard error of relMSE(num) / relMSE(den)}} (errors taken independent)."""
+    return paired_regions(runs, block_key, num, den, region_relerr, lambda x, y: math.sqrt(x ** 2 + y ** 2))
 
 
 def ratio_table(runs, block_key, num, den):
     """{map: {region: relMSE(num) / relMSE(den)}} for the runs that have both strategies."""
-    out = {}
-    for name, m in runs:
-        block = m.get(block_key)
-        if not block:
-            continue
-        a, _ = region_relmse(block, num)
-        b, _ = region_relmse(block, den)
-        if a is None or b is None:
-            continue
-        out[name] = {r: (a[r] / b[r] if a.get(r) and b.get(r) else float("nan")) for r in a}
-    return out
+    return paired_regions(runs, block_key, num, den, lambda block, s: region_relmse(block, s)[0],
+                          lambda x, y: x / y if x and y else float("nan"))
 
 
 def efficiency_ratio(runs, num, den):
