@@ -40,6 +40,15 @@ def oiiotool(tmp, name, *args):
         return re.sub(rb"\d{4}:\d\d:\d\d \d\d:\d\d:\d\d", b"2000:01:01 00:00:00", f.read())
 
 
+def claim_size(exr, width, height):
+    """The EXR with its data and display windows claiming width x height texels (the data stays)."""
+    b = bytearray(exr)
+    for key in (b"dataWindow\0box2i\0", b"displayWindow\0box2i\0"):
+        at = b.index(key) + len(key) + 4
+        b[at:at + 16] = struct.pack("<4i", 0, 0, width - 1, height - 1)
+    return bytes(b)
+
+
 def image_seeds(tmp):
     p = "--pattern"
     half_rgb = oiiotool(tmp, "a.exr", p, "constant:color=1,0.5,0.25", "8x4", "3", "-d", "half")
@@ -63,6 +72,9 @@ def image_seeds(tmp):
         "exr_1e30_scaled": selector(".exr", "auto", 1e30) + huge,
         "exr_truncated": selector(".exr") + sky[: len(sky) // 2],
         "exr_as_hdr": selector(".hdr") + half_rgb,
+        # CI's find: a converting read_image() sized a 256-scanline buffer from this claim (12 GB).
+        "exr_claims_8M_wide": selector(".exr") + claim_size(half_rgb, 8000000, 2),
+        "exr_claims_2M_wide": selector(".exr") + claim_size(half_rgb, 2000000, 2),
         "hdr_rle": selector(".hdr") + hdr_rle,
         "hdr_flat_scale0": selector(".hdr", "auto", 0.0) + hdr_flat,
         "hdr_truncated": selector(".hdr") + hdr_rle[: len(hdr_rle) - 40],

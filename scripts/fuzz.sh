@@ -10,11 +10,14 @@
 #   FUZZ_TARGETS   space-separated targets (default: fuzz_image_load fuzz_table_product)
 #   FUZZ_PARALLEL  1 (default): run the targets at the same time (one per core); 0: one after another
 #   FUZZ_BUILD     build directory (default build-fuzz)
+#   FUZZ_SEED      libFuzzer's -seed (default 1: CI explores the same inputs on the same code and a
+#                  failure replays); 0 = a random seed, for hunting
 #
 # Out-of-memory and timeout reports of fuzz_image_load do not fail the run (they are listed): it runs
 # in fork mode with -ignore_ooms/-ignore_timeouts because OpenEXR 3.1 and OpenImageIO 2.4 allocate
 # whatever a corrupt header claims (a 2 GB string attribute, a 19 GB scanline buffer for a 6M-texel-wide
-# image), which is third-party behaviour, not a crash; see fuzz/README.md. fuzz_table_product bounds
+# image before load() bounded the claims), which is third-party behaviour, not a crash; see
+# fuzz/README.md. fuzz_table_product bounds
 # its own sizes, so there an OOM or a timeout is a finding like any other.
 #
 # Reproduce a finding:  build-fuzz/fuzz/<target> build-fuzz/fuzz-artifacts/<target>/<file>
@@ -26,6 +29,7 @@ ROOT=$PWD
 SECS=${FUZZ_SECONDS:-60}
 BUILD=${FUZZ_BUILD:-build-fuzz}
 PARALLEL=${FUZZ_PARALLEL:-1}
+SEED=${FUZZ_SEED:-1}
 read -r -a TARGETS <<<"${FUZZ_TARGETS:-fuzz_image_load fuzz_table_product}"
 
 t0=$(date +%s)
@@ -47,7 +51,7 @@ run_target() {  # run_target <target>; returns libFuzzer's status
   mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/tmp"
   cp "fuzz/corpus/$t/"* "$dir/corpus/"
   local args=(-max_total_time="$SECS" -artifact_prefix="$dir/artifacts/" -print_final_stats=1
-              -rss_limit_mb=3072)
+              -rss_limit_mb=3072 -seed="$SEED")
   local asan=detect_leaks=1
   case "$t" in
     fuzz_image_load)

@@ -21,6 +21,13 @@ namespace envpis {
 namespace {
 constexpr float kMaxRadiance = 1e30f;
 constexpr std::size_t kMaxTexels = std::size_t(1) << 28;  // 268M texels, 3.2 GB of RGB floats
+// Limits on what a header may claim before any pixel is read. A reader allocates its decoding buffers
+// from the header (OpenEXR: up to 256 scanlines of every channel at once), so a 600-byte file claiming
+// an 8M-texel-wide image must be refused here, not discovered as a multi-GB allocation. An 8k x 4k RGBA
+// float map has 128 KB scanlines: the limits are 128 and 32 times that.
+constexpr std::size_t kMaxScanlineBytes = std::size_t(16) << 20;  // one scanline, all channels, in the file
+constexpr std::size_t kMaxTileBytes = std::size_t(64) << 20;      // one tile, all channels, in the file
+constexpr std::size_t kBandBytes = std::size_t(32) << 20;         // rows decoded at a time (see read_texels)
 
 [[noreturn]] void fail(const std::string& path, const std::string& why) {
   throw Error("cannot load environment map '" + path + "': " + why);
@@ -105,6 +112,48 @@ Vec3 latlong_to_direction(Point2 uv) {
   return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
 }
 
+namespace {
+
+// Reads channels [0, nc) of every texel of the opened image as float, nc values per texel, row after row.
+// The pixels are read in the file's own data format, a band of rows (scanline files) or a row of tiles
+// (tiled files) at a time, into a buffer sized here, and converted here. OpenImageIO's read_image() with
+// a conversion to float would size its own band buffer from the header (256 rows, or a TIFF's claimed
+// rows per strip) and allocate it before finding the data missing: 12 GB for a 600-byte EXR claiming
+// 8M x 2 texels.
+void read_texels(OIIO::ImageInput& in, const OIIO::ImageSpec& spec, int nc, float* out, const std::string& path) {
+  const std::size_t width = static_cast<std::size_t>(spec.width);
+  const std::size_t pixel_bytes = spec.pixel_bytes(0, nc, true);  // channels [0, nc), as stored
+  const std::size_t row_bytes = width * pixel_bytes;
+  int band_rows = spec.tile_width > 0 ? std::min(spec.tile_height, spec.height)
+                                      : static_cast<int>(std::clamp<std::size_t>(kBandBytes / row_bytes, 1,
+                                                                                 static_cast<std::size_t>(spec.height)));
+  std::vector<unsigned char> band(static_cast<std::size_t>(band_rows) * row_bytes);
+  for (int y = 0; y < spec.height; y += band_rows) {
+    const int rows = std::min(band_rows, spec.height - y);
+    const bool ok =
+        spec.tile_width > 0
+            ? in.read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y, spec.y + y + rows, spec.z, spec.z + 1, 0,
+                            nc, OIIO::TypeDesc::UNKNOWN, band.data())
+            : in.read_scanlines(0, 0, spec.y + y, spec.y + y + rows, spec.z, 0, nc, OIIO::TypeDesc::UNKNOWN,
+                                band.data());
+    if (!ok) fail(path, "could not read the pixels (corrupt or truncated?): " + first_line(in.geterror()));
+    float* dst = out + static_cast<std::size_t>(y) * width * nc;
+    const OIIO::stride_t dst_pixel = static_cast<OIIO::stride_t>(nc * sizeof(float));
+    std::size_t offset = 0;  // of channel c within a stored pixel
+    for (int c = 0; c < nc; ++c) {
+      const OIIO::TypeDesc type = spec.channelformat(c);
+      if (!OIIO::convert_image(1, spec.width, rows, 1, band.data() + offset, type,
+                               static_cast<OIIO::stride_t>(pixel_bytes), static_cast<OIIO::stride_t>(row_bytes),
+                               OIIO::AutoStride, dst + c, OIIO::TypeDesc::FLOAT, dst_pixel,
+                               dst_pixel * static_cast<OIIO::stride_t>(width), OIIO::AutoStride))
+        fail(path, std::string("cannot convert texels stored as ") + type.c_str() + " to float");
+      offset += type.size();
+    }
+  }
+}
+
+}  // namespace
+
 EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMapOptions& options) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
@@ -153,12 +202,19 @@ EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMa
   const std::size_t texels = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
   if (texels > kMaxTexels) fail(path, "the image is too large (" + std::to_string(spec.width) + "x" +
                                           std::to_string(spec.height) + ")");
+  if (spec.scanline_bytes(true) > kMaxScanlineBytes)
+    fail(path, "the image's scanlines are implausibly large (" + std::to_string(spec.width) + " texels of " +
+                   std::to_string(spec.nchannels) + " channels, " + std::to_string(spec.scanline_bytes(true)) +
+                   " bytes each; the limit is " + std::to_string(kMaxScanlineBytes) + ")");
+  if (spec.tile_width > 0 && spec.tile_bytes(true) > kMaxTileBytes)
+    fail(path, "the image's tiles are implausibly large (" + std::to_string(spec.tile_width) + "x" +
+                   std::to_string(spec.tile_height) + " texels of " + std::to_string(spec.nchannels) +
+                   " channels)");
   const int nc = std::min(spec.nchannels, 3);  // only the first three channels are used: read no more
   std::vector<float> raw;
   try {
     raw.resize(texels * nc);
-    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
-      fail(path, "could not read the pixels (corrupt or truncated?): " + first_line(in->geterror()));
+    read_texels(*in, spec, nc, raw.data(), path);
   } catch (const std::bad_alloc&) {
     fail(path, "not enough memory for " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels");
   }

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 
 #include <filesystem>
@@ -193,6 +194,90 @@ TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
   const EnvironmentMap b = EnvironmentMap::load(black);
   EXPECT_TRUE(b.is_black());
   EXPECT_EQ(b.max_radiance(), 0.0f);
+  fs::remove_all(dir);
+}
+
+// What a header claims is checked before any pixel is read: a 600-byte EXR whose data window claims
+// 8M x 2 texels made OpenImageIO's converting read_image() allocate a 12 GB band buffer (the fuzzer's
+// find). Pixels are read in the stored formats, per channel, in bands: mixed per-channel formats, tiles
+// that overhang the image and 8/16-bit integer files all convert to the right floats.
+TEST(EnvironmentMap, HeaderClaimsAreBoundedAndStoredFormatsConvert) {
+  const fs::path dir = temp_dir() / "claims";
+  fs::create_directories(dir);
+  const std::string small = (dir / "small.exr").string();
+  write_image(small, 8, 4, 3, std::vector<float>(8 * 4 * 3, 0.5f));
+  std::string bytes;
+  {
+    std::ifstream in(small, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  for (const char* window : {"dataWindow", "displayWindow"}) {
+    const std::string key = std::string(window) + '\0' + "box2i" + '\0';
+    const std::size_t at = bytes.find(key);
+    ASSERT_NE(at, std::string::npos) << window;
+    const std::int32_t box[4] = {0, 0, 8000000 - 1, 1};
+    std::memcpy(&bytes[at + key.size() + 4], box, sizeof box);
+  }
+  const std::string wide = (dir / "wide.exr").string();
+  std::ofstream(wide, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  std::string e = load_error(wide);
+  EXPECT_NE(e.find("'" + wide + "': the image's scanlines are implausibly large (8000000 texels"), std::string::npos)
+      << (e.empty() ? "loaded without error" : e);
+
+  // Tiled, 10x7 in 4x4 tiles, R half, G float, B half, A uint8: values must survive the native read.
+  const int w = 10, h = 7;
+  std::vector<float> px(static_cast<std::size_t>(w) * h * 4);
+  for (int i = 0; i < w * h; ++i) {
+    px[i * 4 + 0] = 0.25f * float(i % 9);
+    px[i * 4 + 1] = 1000.0f + float(i);
+    px[i * 4 + 2] = 0.5f * float(i % 5);
+    px[i * 4 + 3] = 1.0f;
+  }
+  const std::string tiled = (dir / "tiled.exr").string();
+  {
+    auto out = OIIO::ImageOutput::create(tiled);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::HALF);
+    spec.channelformats = {OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::HALF, OIIO::TypeDesc::HALF};
+    spec.tile_width = spec.tile_height = 4;
+    ASSERT_TRUE(out->open(tiled, spec)) << out->geterror();
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data())) << out->geterror();
+    out->close();
+  }
+  {
+    auto in = OIIO::ImageInput::open(tiled);
+    ASSERT_TRUE(in);
+    ASSERT_EQ(in->spec().tile_width, 4);
+    ASSERT_EQ(in->spec().channelformat(1), OIIO::TypeDesc::FLOAT) << "the writer did not keep the mixed formats";
+  }
+  const EnvironmentMap m = EnvironmentMap::load(tiled);
+  ASSERT_EQ(m.width(), w);
+  ASSERT_EQ(m.height(), h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int i = y * w + x;
+      const Rgb t = m.texel(x, y);
+      EXPECT_FLOAT_EQ(t.r, px[i * 4 + 0]) << x << "," << y;
+      EXPECT_FLOAT_EQ(t.g, px[i * 4 + 1]) << x << "," << y;  // float: exact even above half's precision
+      EXPECT_FLOAT_EQ(t.b, px[i * 4 + 2]) << x << "," << y;
+    }
+
+  // 8-bit PNG and 16-bit TIFF: integers normalized to [0, 1].
+  for (const auto& [name, type] : {std::pair{"u8.png", OIIO::TypeDesc::UINT8}, std::pair{"u16.tif", OIIO::TypeDesc::UINT16}}) {
+    const std::string p = (dir / name).string();
+    auto out = OIIO::ImageOutput::create(p);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(4, 2, 3, type);
+    ASSERT_TRUE(out->open(p, spec));
+    std::vector<float> v(4 * 2 * 3);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = float(i % 3) * 0.5f;  // 0, 0.5, 1
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, v.data()));
+    out->close();
+    const Rgb t = EnvironmentMap::load(p).texel(3, 1);
+    EXPECT_FLOAT_EQ(t.r, 0.0f) << name;
+    EXPECT_NEAR(t.g, 0.5f, type == OIIO::TypeDesc::UINT8 ? 1.0f / 255 : 1.0f / 65535) << name;
+    EXPECT_FLOAT_EQ(t.b, 1.0f) << name;
+  }
   fs::remove_all(dir);
 }
 
