@@ -17,8 +17,8 @@
 # in fork mode with -ignore_ooms/-ignore_timeouts because OpenEXR 3.1 and OpenImageIO 2.4 allocate
 # whatever a corrupt header claims (a 2 GB string attribute, a 19 GB scanline buffer for a 6M-texel-wide
 # image before load() bounded the claims), which is third-party behaviour, not a crash; see
-# fuzz/README.md. fuzz_table_product bounds
-# its own sizes, so there an OOM or a timeout is a finding like any other.
+# fuzz/README.md. fuzz_table_product bounds its own sizes, so there an OOM or a timeout is a finding
+# like any other.
 #
 # Reproduce a finding:  build-fuzz/fuzz/<target> build-fuzz/fuzz-artifacts/<target>/<file>
 # (fuzz_table_product: prefix ENVPIS_FUZZ_VERBOSE=1 to print what the input decodes to).
