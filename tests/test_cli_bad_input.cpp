@@ -1,7 +1,8 @@
 // Every bad environment file through all three commands that read one (`envpis table`, `render` and
 // `compare`), run as a user would: zero-byte, truncated and corrupt EXR and HDR, wrong extensions,
-// a directory, a FIFO, a missing or unreadable path, NaN/Inf/negative texels, an all-black map, 1x1,
-// 3x1 and 1x1000 maps, texels of 1e30, top-level sizes 0, 1 and 1000, and unwritable outputs.
+// a directory, a FIFO, a missing or unreadable path, a header claiming 8M-texel scanlines,
+// NaN/Inf/negative texels, an all-black map, 1x1, 3x1 and 1x1000 maps, texels of 1e30, top-level sizes
+// 0, 1 and 1000, and unwritable outputs.
 //
 // Policy checked (docs/cli.md, "Bad input"): a file that cannot be used gives exit code 1 and a single
 // line "envpis CMD: error: cannot load environment map 'PATH': REASON" and nothing else; a file that
@@ -11,11 +12,14 @@
 // a warning and a black image (every strategy falls back to BSDF sampling). Never a crash, a hang
 // (each run is under `timeout`) or a NaN/Inf in an image or in metrics.json.
 #include <gtest/gtest.h>
+
 #include <OpenImageIO/imageio.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -101,6 +105,18 @@ class BadInput : public ::testing::Test {
       std::string b = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 32 +X 64\n";
       for (int y = 0; y < 32; ++y) b += std::string("\x02\x02\x00\x10", 4) + std::string(64 * 4, '\x01');
       write_bytes(path("corrupt-data.hdr"), b);
+    }
+    // A header claiming 8M x 2 texels over 64x32 texels of data (CI's fuzz find: a reader sized a 12 GB
+    // buffer from such a claim before noticing the data was missing).
+    {
+      std::string b = read_bytes(path("good.exr"));
+      for (const std::string key : {std::string("dataWindow\0box2i\0", 17), std::string("displayWindow\0box2i\0", 20)}) {
+        const std::size_t at = b.find(key);
+        ASSERT_NE(at, std::string::npos);
+        const std::int32_t box[4] = {0, 0, 8000000 - 1, 1};
+        std::memcpy(&b[at + key.size() + 4], box, sizeof box);
+      }
+      write_bytes(path("claims-8M-wide.exr"), b);
     }
     write_bytes(path("text.exr"), "this is not an image\n");
     write_bytes(path("text.png"), "this is not an image either\n");
@@ -259,6 +275,7 @@ TEST_F(BadInput, UnusableFilesGiveOneLineErrorsFromEveryCommand) {
       {"corrupt-data.exr", "could not read the pixels (corrupt or truncated?): "},
       {"corrupt-header.hdr", "Radiance HDR reader: "},
       {"corrupt-data.hdr", "could not read the pixels (corrupt or truncated?): "},
+      {"claims-8M-wide.exr", "the image's scanlines are implausibly large (8000000 texels of 3 channels"},
       {"text.exr", "OpenEXR reader: "},
       {"text.png", "PNG"},
       {"directory.exr", "is a directory, not an image file"},
