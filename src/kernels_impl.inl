@@ -86,38 +86,55 @@ struct LobeV {
 /// The proxy's value for a cone (axis a, half-angle b): every lobe evaluated at the cone's direction
 /// closest to its axis. kTransmission = false skips the lobes below the surface (translucent and
 /// refraction), for the common opaque case; it must only be used when both their weights are 0.
-template <class V, bool kTransmission = true>
+/// kDiffuse = false skips the cosine lobes (diffuse and translucent); only when both their weights are 0.
+///
+/// The cone reaches above the surface (some direction at less than 90 degrees from N) exactly when
+/// angle(N, a) < 90 + b, i.e. N.a > cos(90 + b) = -sin b; below it when N.a < sin b. The gates test that
+/// directly, so the sine of angle(N, a) is only computed for the cosine lobes' values.
+template <class V, bool kTransmission = true, bool kDiffuse = true>
 ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
-  // N and -N make supplementary angles with the axis: one sine serves both.
-  const V sn = vsqrt_fast(vmax(V(1.0f) - cn * cn, V(0.0f)));
-  const V up = select(cn >= cb, V(1.0f), cn * cb + sn * sb);     // towards N
   const V cR = closest_cos(l.rx * ax + l.ry * ay + l.rz * az, cb, sb);
-  V value = select(up > V(0.0f), l.kd * up + ggx_like(cR, l.cr, l.mr), V(0.0f));
+  V value = ggx_like(cR, l.cr, l.mr);
+  V sn(0.0f);
+  if constexpr (kDiffuse) {
+    // N and -N make supplementary angles with the axis: one sine serves both.
+    sn = vsqrt_fast(vmax(V(1.0f) - cn * cn, V(0.0f)));
+    value = value + l.kd * select(cn >= cb, V(1.0f), cn * cb + sn * sb);  // towards N
+  }
+  value = select(cn > -sb, value, V(0.0f));
   if constexpr (kTransmission) {
-    const V down = select(-cn >= cb, V(1.0f), sn * sb - cn * cb);  // towards -N
     const V cT = closest_cos(l.tx * ax + l.ty * ay + l.tz * az, cb, sb);
-    value = value + select(down > V(0.0f), l.kt * down + ggx_like(cT, l.ct, l.mt), V(0.0f));
+    V below = ggx_like(cT, l.ct, l.mt);
+    if constexpr (kDiffuse) below = below + l.kt * select(-cn >= cb, V(1.0f), sn * sb - cn * cb);  // towards -N
+    value = value + select(cn < sb, below, V(0.0f));
   }
   return value;
 }
 
-template <class V, bool kTransmission>
+template <class V, bool kTransmission, bool kDiffuse>
 ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
   constexpr std::size_t W = lanes<V>();
   const LobeV<V> l(p);
   for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
-    const V value = proxy_cone_value<V, kTransmission>(l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i),
-                                                       load_any<V>(cells.az + i), load_any<V>(cells.cosb + i),
-                                                       load_any<V>(cells.sinb + i));
+    const V value = proxy_cone_value<V, kTransmission, kDiffuse>(
+        l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
+        load_any<V>(cells.cosb + i), load_any<V>(cells.sinb + i));
     store(value * load_any<V>(cells.prob + i), out + i);
   }
 }
 
 template <class V>
 __attribute__((flatten)) void product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
-  if (p.kt > 0.0f || p.ct > 0.0f) product_weights_impl<V, true>(cells, p, out);
-  else product_weights_impl<V, false>(cells, p, out);
+  const bool transmission = p.kt > 0.0f || p.ct > 0.0f;
+  const bool diffuse = p.kd > 0.0f || p.kt > 0.0f;
+  if (transmission) {
+    if (diffuse) product_weights_impl<V, true, true>(cells, p, out);
+    else product_weights_impl<V, true, false>(cells, p, out);
+  } else {
+    if (diffuse) product_weights_impl<V, false, true>(cells, p, out);
+    else product_weights_impl<V, false, false>(cells, p, out);
+  }
 }
 
 template <class V>
