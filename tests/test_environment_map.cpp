@@ -200,7 +200,8 @@ TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
 // What a header claims is checked before any pixel is read: a 600-byte EXR whose data window claims
 // 8M x 2 texels made OpenImageIO's converting read_image() allocate a 12 GB band buffer (the fuzzer's
 // find). Pixels are read in the stored formats, per channel, in bands: mixed per-channel formats, tiles
-// that overhang the image and 8/16-bit integer files all convert to the right floats.
+// that overhang the image, a data window away from (0, 0) and 8/16-bit integer files all convert to the
+// right floats.
 TEST(EnvironmentMap, HeaderClaimsAreBoundedAndStoredFormatsConvert) {
   const fs::path dir = temp_dir() / "claims";
   fs::create_directories(dir);
@@ -261,6 +262,31 @@ TEST(EnvironmentMap, HeaderClaimsAreBoundedAndStoredFormatsConvert) {
       EXPECT_FLOAT_EQ(t.g, px[i * 4 + 1]) << x << "," << y;  // float: exact even above half's precision
       EXPECT_FLOAT_EQ(t.b, px[i * 4 + 2]) << x << "," << y;
     }
+
+  // A data window that does not start at (0, 0), scanlines and tiles: texel (0, 0) is its first pixel.
+  for (const int tile : {0, 4}) {
+    const std::string p = (dir / ("origin" + std::to_string(tile) + ".exr")).string();
+    auto out = OIIO::ImageOutput::create(p);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::HALF);
+    spec.x = 5;
+    spec.y = 3;
+    spec.tile_width = spec.tile_height = tile;
+    ASSERT_TRUE(out->open(p, spec)) << out->geterror();
+    std::vector<float> v(static_cast<std::size_t>(w) * h * 3);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = 0.125f * float(i % 17);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, v.data())) << out->geterror();
+    out->close();
+    const EnvironmentMap o = EnvironmentMap::load(p);
+    ASSERT_EQ(o.width(), w);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float* e = &v[static_cast<std::size_t>(y * w + x) * 3];
+        const Rgb t = o.texel(x, y);
+        EXPECT_EQ(t.r, e[0]) << tile << ": " << x << "," << y;
+        EXPECT_EQ(t.b, e[2]) << tile << ": " << x << "," << y;
+      }
+  }
 
   // 8-bit PNG and 16-bit TIFF: integers normalized to [0, 1].
   for (const auto& [name, type] : {std::pair{"u8.png", OIIO::TypeDesc::UINT8}, std::pair{"u16.tif", OIIO::TypeDesc::UINT16}}) {
