@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 
 #include "bench_common.h"
@@ -121,14 +122,10 @@ const std::vector<Vec3>& uniform_directions() {
   return dirs;
 }
 
-const detail::Kernels* avx2_kernels_if_supported() {
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_cpu_init();
-  if (!(__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))) return nullptr;
-  return detail::kernels_avx2();
-#else
+const detail::Kernels* kernels_if_supported(const char* name) {
+  for (const detail::Kernels* k : detail::kernels_available())
+    if (std::strcmp(k->name, name) == 0) return k;
   return nullptr;
-#endif
 }
 
 }  // namespace envpis_bench

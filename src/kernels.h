@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 namespace envpis::detail {
 
@@ -44,8 +45,12 @@ struct Kernels {
 
 const Kernels& kernels_scalar();
 const Kernels& kernels_sse2();
-const Kernels* kernels_avx2();  ///< nullptr when not compiled in
-/// The best set the CPU supports (respecting ENVPIS_SIMD), chosen once.
+const Kernels* kernels_avx2();    ///< nullptr when not compiled in
+const Kernels* kernels_avx512();  ///< nullptr when not compiled in
+/// Every set this build has and this CPU can run, from the scalar reference to the widest.
+std::vector<const Kernels*> kernels_available();
+/// The widest available set, or the one ENVPIS_SIMD names (scalar, sse2, avx2, avx512) if available;
+/// chosen once.
 const Kernels& kernels_best();
 
 }  // namespace envpis::detail

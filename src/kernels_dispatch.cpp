@@ -9,6 +9,9 @@ namespace envpis::detail {
 #if !defined(ENVPIS_HAVE_AVX2_KERNELS)
 const Kernels* kernels_avx2() { return nullptr; }
 #endif
+#if !defined(ENVPIS_HAVE_AVX512_KERNELS)
+const Kernels* kernels_avx512() { return nullptr; }
+#endif
 
 static bool cpu_has_avx2_fma() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -19,12 +22,30 @@ static bool cpu_has_avx2_fma() {
 #endif
 }
 
+// libgcc's feature bits also require the OS to save the AVX-512 state (XCR0), not only the CPUID bits.
+static bool cpu_has_avx512() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  return cpu_has_avx2_fma() && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+         __builtin_cpu_supports("avx512vl");
+#else
+  return false;
+#endif
+}
+
+std::vector<const Kernels*> kernels_available() {
+  std::vector<const Kernels*> k{&kernels_scalar(), &kernels_sse2()};
+  if (kernels_avx2() && cpu_has_avx2_fma()) k.push_back(kernels_avx2());
+  if (kernels_avx512() && cpu_has_avx512()) k.push_back(kernels_avx512());
+  return k;
+}
+
 static const Kernels& choose() {
-  const char* force = std::getenv("ENVPIS_SIMD");
-  if (force && std::strcmp(force, "scalar") == 0) return kernels_scalar();
-  if (force && std::strcmp(force, "sse2") == 0) return kernels_sse2();
-  if (kernels_avx2() && cpu_has_avx2_fma()) return *kernels_avx2();
-  return kernels_sse2();
+  const std::vector<const Kernels*> available = kernels_available();
+  if (const char* force = std::getenv("ENVPIS_SIMD"))
+    for (const Kernels* k : available)
+      if (std::strcmp(force, k->name) == 0) return *k;
+  return *available.back();
 }
 
 const Kernels& kernels_best() {

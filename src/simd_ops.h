@@ -1,5 +1,5 @@
 // Internal: a handful of operations written once for `float` (the scalar reference) and for
-// std::experimental::simd<float, Abi> (SSE2 / AVX2 lanes), so every kernel has one source.
+// std::experimental::simd<float, Abi> (SSE2 / AVX2 / AVX-512 lanes), so every kernel has one source.
 // Included once per instruction set, inside that set's own namespace (ENVPIS_KERNEL_NS), so that no
 // inline function compiled for AVX2 can be merged by the linker with its SSE2 or scalar twin.
 
@@ -69,6 +69,9 @@ ENVPIS_INLINE float vsqrt_fast(float x) { return std::sqrt(x); }
 ENVPIS_INLINE float vrcp_fast(float x) { return 1.0f / x; }
 template <class A>
 ENVPIS_INLINE VF<A> rsqrt_estimate(VF<A> x) {
+#if defined(__AVX512F__)
+  if constexpr (sizeof(VF<A>) == 64) return VF<A>(_mm512_maskz_rsqrt14_ps(__mmask16(0xffff), static_cast<__m512>(x)));
+#endif
 #if defined(__AVX__)
   if constexpr (sizeof(VF<A>) == 32) return VF<A>(_mm256_rsqrt_ps(static_cast<__m256>(x)));
 #endif
@@ -79,6 +82,9 @@ ENVPIS_INLINE VF<A> rsqrt_estimate(VF<A> x) {
 }
 template <class A>
 ENVPIS_INLINE VF<A> rcp_estimate(VF<A> x) {
+#if defined(__AVX512F__)
+  if constexpr (sizeof(VF<A>) == 64) return VF<A>(_mm512_maskz_rcp14_ps(__mmask16(0xffff), static_cast<__m512>(x)));
+#endif
 #if defined(__AVX__)
   if constexpr (sizeof(VF<A>) == 32) return VF<A>(_mm256_rcp_ps(static_cast<__m256>(x)));
 #endif

@@ -6,6 +6,9 @@
 #include <random>
 
 #include "chi2.h"
+#include "envpis/equal_area.h"
+#include "kernels.h"
+#include "proxy_internal.h"
 #include "test_util.h"
 
 // Counts heap allocations, to check that prepare() and sample() never allocate.
@@ -168,6 +171,63 @@ TEST(ProductSampler, SimdWeightsEqualScalarReference) {
         // < 3.7e-4 each, src/simd_ops.h); the scalar kernel is exact.
         ASSERT_NEAR(simd.cell_probability(i), scalar.cell_probability(i), 2e-3 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
         ASSERT_NEAR(scalar.cell_probability(i), r, 1e-4 * std::max(1e-3, r)) << name << " " << c.label << " cell " << i;
+      }
+    }
+  }
+}
+
+// ProductSampler only runs the widest kernel set the CPU has (kernels_best()); this runs every set this
+// build has and this CPU can run (scalar, SSE2, AVX2, AVX-512) on the product weights and both
+// mappings, against the scalar kernels, over the cell arrays of real tables and the random proxies.
+TEST(ProductSampler, EveryAvailableKernelSetMatchesTheScalarKernels) {
+  const std::vector<const detail::Kernels*> sets = detail::kernels_available();
+  ASSERT_GE(sets.size(), 2u);
+  const detail::Kernels& ref = detail::kernels_scalar();
+  std::string names;
+  for (const detail::Kernels* k : sets) names += std::string(" ") + k->name;
+  std::printf("kernel sets on this CPU:%s; ProductSampler uses %s\n", names.c_str(), simd_name());
+  for (const auto& [name, table] : test_tables()) {
+    const detail::CellArrays cells{table->soa_axis_x(), table->soa_axis_y(), table->soa_axis_z(),
+                                   table->soa_cos(),    table->soa_sin(),    table->soa_prob(),
+                                   table->padded_cell_count()};
+    std::vector<float> expected(table->padded_cell_count()), got(table->padded_cell_count());
+    for (const Config& c : random_configs(30, 17)) {
+      const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo);
+      ASSERT_TRUE(pp.valid());
+      const detail::LobeParams lobes = detail::to_lobe_params(pp);
+      ref.product_weights(cells, lobes, expected.data());
+      double total = 0;
+      for (float w : expected) total += w;
+      for (const detail::Kernels* k : sets) {
+        k->product_weights(cells, lobes, got.data());
+        for (int i = 0; i < table->padded_cell_count(); ++i) {
+          // Hardware estimates of 1/sqrt and 1/x (relative error < 3.7e-4 each, src/simd_ops.h).
+          ASSERT_NEAR(got[i], expected[i], 2e-3 * std::max(double(expected[i]), 1e-6 * total))
+              << k->name << " " << name << " " << c.label << " cell " << i;
+        }
+      }
+    }
+  }
+  // Mappings, with lengths that leave tails for every lane count.
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (const std::size_t n : {std::size_t(1), std::size_t(7), std::size_t(33), std::size_t(1000)}) {
+    std::vector<float> u(n), v(n), x(n), y(n), z(n), ex(n), ey(n), ez(n), bu(n), bv(n), eu(n), ev(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      u[i] = i < 4 ? float(i % 2) : U(rng);
+      v[i] = i < 4 ? float(i / 2) : U(rng);
+    }
+    ref.square_to_sphere(n, u.data(), v.data(), ex.data(), ey.data(), ez.data());
+    ref.sphere_to_square(n, ex.data(), ey.data(), ez.data(), eu.data(), ev.data());
+    for (const detail::Kernels* k : sets) {
+      k->square_to_sphere(n, u.data(), v.data(), x.data(), y.data(), z.data());
+      k->sphere_to_square(n, ex.data(), ey.data(), ez.data(), bu.data(), bv.data());
+      for (std::size_t i = 0; i < n; ++i) {
+        ASSERT_NEAR(x[i], ex[i], 1e-6f) << k->name << " n=" << n << " i=" << i;
+        ASSERT_NEAR(y[i], ey[i], 1e-6f) << k->name << " n=" << n << " i=" << i;
+        ASSERT_NEAR(z[i], ez[i], 1e-6f) << k->name << " n=" << n << " i=" << i;
+        ASSERT_NEAR(bu[i], eu[i], 1e-6f) << k->name << " n=" << n << " i=" << i;
+        ASSERT_NEAR(bv[i], ev[i], 1e-6f) << k->name << " n=" << n << " i=" << i;
       }
     }
   }

@@ -32,7 +32,7 @@ Point2 equal_area_sphere_to_square(Vec3 d);
 bool equal_area_wrap(int n, int& x, int& y);
 
 /// Batched (structure-of-arrays) versions, vectorized with the widest SIMD unit the CPU has
-/// (AVX2+FMA, else SSE2, else scalar; chosen once at run time). Arrays may alias neither each other
+/// (AVX-512, else AVX2+FMA, else SSE2, else scalar; chosen once at run time). Arrays may alias neither each other
 /// nor be misaligned-sensitive: any alignment works.
 void equal_area_square_to_sphere(std::size_t n, const float* u, const float* v, float* x, float* y,
                                  float* z);
@@ -40,8 +40,9 @@ void equal_area_sphere_to_square(std::size_t n, const float* x, const float* y, 
                                  float* v);
 
 /// Name and lane count of the SIMD path the batched functions and the product sampler use
-/// ("avx2" / 8, "sse2" / 4 or "scalar" / 1). ENVPIS_SIMD=scalar|sse2|avx2 in the environment
-/// forces a lower one (for benchmarking and debugging).
+/// ("avx512" / 16, "avx2" / 8, "sse2" / 4 or "scalar" / 1). ENVPIS_SIMD=scalar|sse2|avx2|avx512 in the
+/// environment picks that one instead, if this CPU runs it (for benchmarking and debugging, or to keep
+/// 512-bit instructions off CPUs that lower their clock for them).
 const char* simd_name();
 int simd_width();
 

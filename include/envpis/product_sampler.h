@@ -4,8 +4,8 @@
 // For each of the T x T top cells c of the ImportanceTable:
 //     P[c] = E[c] * proxy(c)
 // where proxy(c) evaluates every proxy lobe at the direction of the cell's bounding cone closest to
-// that lobe's axis (vectorized over cells: AVX2 8 lanes or SSE2 4 lanes, chosen at run time). A cell is
-// chosen from the T x T CDF of P, then a direction inside it from the table's fine distribution of
+// that lobe's axis (vectorized over cells: AVX-512 16 lanes, AVX2 8 or SSE2 4, chosen at run time).
+// A cell is chosen from the T x T CDF of P, then a direction inside it from the table's fine distribution of
 // that cell, which still follows the environment only. The density of any direction w in cell c is
 //     p(w) = (P[c] / sum P) * q_c(w)
 // with q_c the fine density of the cell; pdf(w) returns exactly that, for MIS with BSDF sampling.
