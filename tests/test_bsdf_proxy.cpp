@@ -121,14 +121,29 @@ TEST(BsdfProxy, AxesAndSpecialCases) {
   one.add_refraction(1, 0.3f, 1.0f);
   pp = prepare_proxy(one, n, wo);
   EXPECT_NEAR(dot(pp.t, -wo), 1.0f, 1e-5f);
-  // Seen from below: N flips, eta inverts; leaving glass at 60 degrees is total internal reflection.
+  // Seen from below: N flips, eta inverts; leaving glass at 60 degrees is total internal reflection
+  // of the macro-surface. A (nearly) smooth interface reflects it all: the refraction weight joins
+  // the reflection lobe.
   const Vec3 below = normalize(Vec3{std::sin(1.05f), 0, -std::cos(1.05f)});
-  pp = prepare_proxy(p, n, below);
+  BsdfProxy smooth;
+  smooth.add_reflection(1, 0.02f);
+  smooth.add_refraction(1, 0.02f, 1.5f);
+  pp = prepare_proxy(smooth, n, below);
   EXPECT_TRUE(pp.tir);
   EXPECT_NEAR(pp.n.z, -1.0f, 1e-6f);
   EXPECT_FLOAT_EQ(pp.wt, 0.0f);
   EXPECT_FLOAT_EQ(pp.wr, 2.0f);
   EXPECT_NEAR(pp.eta, 1 / 1.5f, 1e-6f);
+  // A rough one (alpha 0.2) still transmits through tilted microfacets: its refraction lobe stays,
+  // on the grazing exit direction away from wo (the refracted direction's limit at the critical
+  // angle), as wide as the cap allows.
+  pp = prepare_proxy(p, n, below);
+  EXPECT_TRUE(pp.tir);
+  EXPECT_FLOAT_EQ(pp.wt, 1.0f);
+  EXPECT_FLOAT_EQ(pp.wr, 1.0f);
+  EXPECT_NEAR(pp.t.x, -1.0f, 1e-6f);
+  EXPECT_NEAR(pp.t.z, 0.0f, 1e-6f);
+  EXPECT_NEAR(pp.alpha_t, 0.8f, 1e-6f);
   // Roughness 0 and the floor; roughness 1 capped at max_alpha (default 0.8), at most 1.
   BsdfProxy mirror;
   mirror.add_reflection(1, 0);

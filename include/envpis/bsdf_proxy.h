@@ -37,8 +37,12 @@
 // Special cases (all handled inside prepare_proxy):
 //   - wo below the surface (N.wo < 0): N is flipped and eta inverted, so the proxy describes the
 //     BSDF seen from wo's side.
-//   - total internal reflection (no refracted direction): the refraction weight and roughness are
-//     folded into the reflection lobe, where the energy goes.
+//   - total internal reflection of the macro-surface (no refracted direction): for a (nearly) smooth
+//     refraction lobe (alpha < 0.05) its weight and roughness are folded into the reflection lobe,
+//     where the energy goes; a rough one keeps its weight (a rough interface still transmits, through
+//     microfacets tilted towards wo) on the grazing exit direction away from wo, the refracted
+//     direction's limit at the critical angle, with a' at the cap (docs/proxy.md, "Total internal
+//     reflection").
 //   - roughness 0: allowed; the floor (or a minimum of 1e-3 when the floor is 0) keeps the lobe finite.
 //   - IOR: any positive value; IOR 1 refracts straight through (T = -wo); below 1 is a valid ratio
 //     (e.g. leaving glass); NaN, 0 or negative is treated as 1.
