@@ -478,6 +478,31 @@ TEST(SceneFile, LoadsSpheresObjPlyAndProceduralMeshes) {
   }
 }
 
+// The JSON scenes in scenes/ (used by the measurements in BENCHMARKS.md) load, and every strategy
+// renders them, with the path integrator, to a finite image.
+TEST(SceneFile, ShippedScenesLoadAndRender) {
+  const fs::path dir = fs::path(ENVPIS_TEST_DATA).parent_path().parent_path() / "scenes";  // tests/data -> repo
+  ASSERT_TRUE(fs::is_directory(dir)) << dir;
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    const Scene s = load_scene_file(entry.path().string(), test_sky());
+    EXPECT_GE(s.objects().size(), 3u) << entry.path();
+    for (Strategy st : all_strategies()) {
+      RenderOptions o;
+      o.strategy = st;
+      o.spp = 1;
+      o.width = 32;
+      o.height = 8;
+      o.oracle.resolution = 8;
+      const RenderResult r = render(s, o);
+      EXPECT_EQ(r.nonfinite_pixels, 0u) << entry.path() << " " << to_string(st);
+    }
+  }
+  EXPECT_GE(count, 2);
+}
+
 std::string load_error(const std::string& text, const TempDir& dir) {
   const std::string path = dir.write("bad.json", text);
   try {
