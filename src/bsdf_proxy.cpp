@@ -94,20 +94,23 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
   float cos_t = 0;
   if (sin2_t >= 1.0f) {
     p.tir = wt > 0;
-    const Vec3 tangent = wo - n * cos_o;  // non-zero: sin_o > eta here
-    if (wt > 0 && at < kTirFoldAlpha) {
-      // A (nearly) smooth interface reflects everything beyond the critical angle.
-      ar = (ar * wr + at * wt) / (wr + wt);
-      wr += wt;
-      wt = 0;
-      p.t = -n;
-    } else {
-      // A rough one still transmits (microfacets tilted towards wo), into directions near the
+    const Vec3 tangent = wo - n * cos_o;  // non-zero (sin_o > eta) but for rounding with a tiny eta
+    if (wt > 0 && at >= kTirFoldAlpha && dot(tangent, tangent) > 1e-20f) {
+      // A rough interface still transmits (microfacets tilted towards wo), into directions near the
       // horizon: the refracted direction's limit at the critical angle, grazing, away from wo. cos_t
       // = 0 takes a_t' to the cap below. Folding this weight into the reflection lobe put the
       // product's samples where a closed object blocks them and left the transmitted light to BSDF
       // sampling (rough glass under studio, path integrator: 7-10x the relMSE of mis; BENCHMARKS.md).
       p.t = normalize(tangent) * -1.0f;
+    } else {
+      // A (nearly) smooth one reflects everything beyond the critical angle. (T stays finite for the
+      // translucent lobe's gate even when there is no refraction weight.)
+      if (wt > 0) {
+        ar = (ar * wr + at * wt) / (wr + wt);
+        wr += wt;
+        wt = 0;
+      }
+      p.t = -n;
     }
   } else {
     cos_t = std::sqrt(1.0f - sin2_t);
