@@ -37,8 +37,4 @@ const std::vector<envpis::Point2>& uniform_points();
 /// kRing uniform unit directions.
 const std::vector<envpis::Vec3>& uniform_directions();
 
-/// The kernel set of that name ("sse2", "avx2", "avx512") when it is compiled in and the CPU runs it,
-/// else nullptr (the benchmark then reports that it was skipped).
-const envpis::detail::Kernels* kernels_if_supported(const char* name);
-
 }  // namespace envpis_bench

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <random>
 
 #include "bench_common.h"
@@ -120,12 +119,6 @@ const std::vector<Vec3>& uniform_directions() {
     return out;
   }();
   return dirs;
-}
-
-const detail::Kernels* kernels_if_supported(const char* name) {
-  for (const detail::Kernels* k : detail::kernels_available())
-    if (std::strcmp(k->name, name) == 0) return k;
-  return nullptr;
 }
 
 }  // namespace envpis_bench

@@ -81,8 +81,8 @@ void square_to_sphere_kernel(benchmark::State& state, const detail::Kernels* k) 
 }
 void BM_SquareToSphere_KernelScalar(benchmark::State& s) { square_to_sphere_kernel(s, &detail::kernels_scalar()); }
 void BM_SquareToSphere_KernelSSE2(benchmark::State& s) { square_to_sphere_kernel(s, &detail::kernels_sse2()); }
-void BM_SquareToSphere_KernelAVX2(benchmark::State& s) { square_to_sphere_kernel(s, kernels_if_supported("avx2")); }
-void BM_SquareToSphere_KernelAVX512(benchmark::State& s) { square_to_sphere_kernel(s, kernels_if_supported("avx512")); }
+void BM_SquareToSphere_KernelAVX2(benchmark::State& s) { square_to_sphere_kernel(s, detail::kernels_named("avx2")); }
+void BM_SquareToSphere_KernelAVX512(benchmark::State& s) { square_to_sphere_kernel(s, detail::kernels_named("avx512")); }
 
 // ---- sphere -> square ----
 
@@ -123,8 +123,8 @@ void sphere_to_square_kernel(benchmark::State& state, const detail::Kernels* k) 
 }
 void BM_SphereToSquare_KernelScalar(benchmark::State& s) { sphere_to_square_kernel(s, &detail::kernels_scalar()); }
 void BM_SphereToSquare_KernelSSE2(benchmark::State& s) { sphere_to_square_kernel(s, &detail::kernels_sse2()); }
-void BM_SphereToSquare_KernelAVX2(benchmark::State& s) { sphere_to_square_kernel(s, kernels_if_supported("avx2")); }
-void BM_SphereToSquare_KernelAVX512(benchmark::State& s) { sphere_to_square_kernel(s, kernels_if_supported("avx512")); }
+void BM_SphereToSquare_KernelAVX2(benchmark::State& s) { sphere_to_square_kernel(s, detail::kernels_named("avx2")); }
+void BM_SphereToSquare_KernelAVX512(benchmark::State& s) { sphere_to_square_kernel(s, detail::kernels_named("avx512")); }
 
 }  // namespace
 

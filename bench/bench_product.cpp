@@ -67,8 +67,8 @@ void product_weights_kernel(benchmark::State& state, const detail::Kernels* k) {
 }
 void BM_ProductWeights_KernelScalar(benchmark::State& s) { product_weights_kernel(s, &detail::kernels_scalar()); }
 void BM_ProductWeights_KernelSSE2(benchmark::State& s) { product_weights_kernel(s, &detail::kernels_sse2()); }
-void BM_ProductWeights_KernelAVX2(benchmark::State& s) { product_weights_kernel(s, kernels_if_supported("avx2")); }
-void BM_ProductWeights_KernelAVX512(benchmark::State& s) { product_weights_kernel(s, kernels_if_supported("avx512")); }
+void BM_ProductWeights_KernelAVX2(benchmark::State& s) { product_weights_kernel(s, detail::kernels_named("avx2")); }
+void BM_ProductWeights_KernelAVX512(benchmark::State& s) { product_weights_kernel(s, detail::kernels_named("avx512")); }
 
 // ---- the proxy preparation alone (axes, roughness transform): part of prepare() ----
 

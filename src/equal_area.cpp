@@ -7,8 +7,7 @@ namespace envpis {
 
 namespace detail {
 const Kernels& kernels_scalar() {
-  static const Kernels k{"scalar", 1, scalar::square_to_sphere_n<float>, scalar::sphere_to_square_n<float>,
-                         scalar::product_weights_t<float>};
+  static const Kernels k = scalar::make_kernels<float>("scalar");
   return k;
 }
 }  // namespace detail

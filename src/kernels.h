@@ -49,6 +49,8 @@ const Kernels* kernels_avx2();    ///< nullptr when not compiled in
 const Kernels* kernels_avx512();  ///< nullptr when not compiled in
 /// Every set this build has and this CPU can run, from the scalar reference to the widest.
 std::vector<const Kernels*> kernels_available();
+/// The available set of that name ("scalar", "sse2", "avx2", "avx512"), or nullptr.
+const Kernels* kernels_named(const char* name);
 /// The widest available set, or the one ENVPIS_SIMD names (scalar, sse2, avx2, avx512) if available;
 /// chosen once.
 const Kernels& kernels_best();

@@ -6,8 +6,7 @@ namespace envpis::detail {
 const Kernels* kernels_avx2() {
   using V = std::experimental::native_simd<float>;
   static_assert(V::size() == 8, "kernels_avx2.cpp must be compiled with -mavx2 -mfma");
-  static const Kernels k{"avx2", 8, avx2::square_to_sphere_n<V>, avx2::sphere_to_square_n<V>,
-                         avx2::product_weights_t<V>};
+  static const Kernels k = avx2::make_kernels<V>("avx2");
   return &k;
 }
 }  // namespace envpis::detail

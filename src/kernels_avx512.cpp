@@ -7,8 +7,7 @@ namespace envpis::detail {
 const Kernels* kernels_avx512() {
   using V = std::experimental::native_simd<float>;
   static_assert(V::size() == 16, "kernels_avx512.cpp must be compiled with -mavx512f");
-  static const Kernels k{"avx512", 16, avx512::square_to_sphere_n<V>, avx512::sphere_to_square_n<V>,
-                         avx512::product_weights_t<V>};
+  static const Kernels k = avx512::make_kernels<V>("avx512");
   return &k;
 }
 }  // namespace envpis::detail

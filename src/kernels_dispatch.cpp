@@ -40,12 +40,16 @@ std::vector<const Kernels*> kernels_available() {
   return k;
 }
 
+const Kernels* kernels_named(const char* name) {
+  for (const Kernels* k : kernels_available())
+    if (std::strcmp(name, k->name) == 0) return k;
+  return nullptr;
+}
+
 static const Kernels& choose() {
-  const std::vector<const Kernels*> available = kernels_available();
   if (const char* force = std::getenv("ENVPIS_SIMD"))
-    for (const Kernels* k : available)
-      if (std::strcmp(force, k->name) == 0) return *k;
-  return *available.back();
+    if (const Kernels* k = kernels_named(force)) return *k;
+  return *kernels_available().back();
 }
 
 const Kernels& kernels_best() {

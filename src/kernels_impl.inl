@@ -164,4 +164,10 @@ __attribute__((flatten)) void sphere_to_square_n(std::size_t n, const float* x, 
   for (; i < n; ++i) sphere_to_square_one<float>(x[i], y[i], z[i], u[i], v[i]);
 }
 
+/// This instruction set's kernel table (V = float: the scalar reference).
+template <class V>
+Kernels make_kernels(const char* name) {
+  return {name, static_cast<int>(lanes<V>()), square_to_sphere_n<V>, sphere_to_square_n<V>, product_weights_t<V>};
+}
+
 }  // namespace envpis::detail::ENVPIS_KERNEL_NS

@@ -5,8 +5,7 @@
 namespace envpis::detail {
 const Kernels& kernels_sse2() {
   using V = std::experimental::native_simd<float>;
-  static const Kernels k{"sse2", static_cast<int>(V::size()), sse2::square_to_sphere_n<V>,
-                         sse2::sphere_to_square_n<V>, sse2::product_weights_t<V>};
+  static const Kernels k = sse2::make_kernels<V>("sse2");
   return k;
 }
 }  // namespace envpis::detail
