@@ -1,7 +1,9 @@
 // Shared helpers for the tests: synthetic maps, the blender-data maps, a fixed-seed RNG.
 #pragma once
 
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -10,6 +12,18 @@
 #include "envpis/envpis.h"
 
 namespace envpis::test {
+
+/// The bytes of an OpenEXR file with its data and display windows rewritten to claim width x height
+/// texels (the pixel data stays as it was); empty when the file has no such attributes.
+inline std::string exr_claiming(std::string exr, int width, int height) {
+  for (const std::string key : {std::string("dataWindow\0box2i\0", 17), std::string("displayWindow\0box2i\0", 20)}) {
+    const std::size_t at = exr.find(key);
+    if (at == std::string::npos || at + key.size() + 4 + 16 > exr.size()) return {};
+    const std::int32_t box[4] = {0, 0, width - 1, height - 1};
+    std::memcpy(&exr[at + key.size() + 4], box, sizeof box);  // after the attribute's 4-byte size
+  }
+  return exr;
+}
 
 /// Directory of Debian's blender-data studio-light HDRIs (1024x512 lat-long EXR).
 inline std::string blender_world_dir() { return "/usr/share/blender/datafiles/studiolights/world"; }
