@@ -29,7 +29,7 @@ namespace {
 inline bool sides_agree(Vec3 wi, Vec3 ng, float local_z) { return (dot(wi, ng) > 0) == (local_z > 0); }
 }  // namespace
 
-Rgb Integrator::li(const Ray& camera_ray, SampleRng& rng, LightSampler& light) const {
+Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light) const {
   Rgb L{0, 0, 0};
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit)) return env_.eval(camera_ray.direction);

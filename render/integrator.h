@@ -17,7 +17,7 @@
 
 #include <string>
 
-#include "render/rng.h"
+#include "render/sampler.h"
 #include "render/scene.h"
 #include "render/strategy.h"
 
@@ -43,7 +43,7 @@ class Integrator {
  public:
   Integrator(const Scene& scene, const IntegratorOptions& options);
   /// Radiance arriving along the camera ray.
-  Rgb li(const Ray& camera_ray, SampleRng& rng, LightSampler& light) const;
+  Rgb li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light) const;
   const IntegratorOptions& options() const { return options_; }
 
  private:

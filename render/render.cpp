@@ -13,7 +13,7 @@
 #include <mutex>
 #include <optional>
 
-#include "render/rng.h"
+#include "render/sampler.h"
 
 namespace envpis::render {
 
@@ -111,7 +111,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 double sum[3] = {0, 0, 0};
                 double sum_avg = 0, sum_avg2 = 0;
                 for (int s = 0; s < options.spp; ++s) {
-                  SampleRng rng(options.seed, pix, static_cast<std::uint64_t>(s));
+                  PixelSampler rng(options.sampler, options.seed, pix, static_cast<std::uint64_t>(s));
                   const Point2 jitter = rng.next2d();
                   const Ray ray = camera.generate_ray(float(x) + jitter.x, float(y) + jitter.y);
                   const Rgb L = integrator.li(ray, rng, light);

@@ -6,7 +6,8 @@
 //   RenderResult r = render(scene, o);                  // r.rgb, r.object_id, r.seconds
 //   write_exr("fig1-product.exr", r);
 //
-// Determinism: pixel (x, y), sample s uses random numbers keyed on (seed, y * width + x, s, dimension)
+// Sampling: Owen-scrambled Sobol points by default, independent numbers on request (render/sampler.h).
+// Determinism: pixel (x, y), sample s uses numbers keyed on (sampler, seed, y * width + x, s, dimension)
 // only, and each pixel is accumulated by one thread in sample order, so the image is bit-identical at
 // any thread count for the same seed.
 //
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "render/integrator.h"
+#include "render/sampler.h"
 #include "render/scene.h"
 #include "render/strategy.h"
 
@@ -33,6 +35,7 @@ struct RenderOptions {
   Strategy strategy = Strategy::Mis;
   IntegratorKind integrator = IntegratorKind::Path;
   Heuristic heuristic = Heuristic::Power;
+  SamplerKind sampler = SamplerKind::Sobol;
   int spp = 16;
   std::uint64_t seed = 0;
   int width = 0, height = 0;  ///< 0: the scene camera's default size

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "render/rng.h"
 
 namespace envpis::render {
 

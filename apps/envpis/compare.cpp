@@ -598,8 +598,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
   base.width = W;
   base.height = H;
   const int threads_used = base.threads > 0 ? base.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  progress.line("scene %s, %dx%d, environment %s, integrator %s, %d threads", a.common.scene.c_str(), W, H,
-                scene.environment_description().c_str(), to_string(base.integrator), threads_used);
+  progress.line("scene %s, %dx%d, environment %s, integrator %s, sampler %s, %d threads", a.common.scene.c_str(),
+                W, H, scene.environment_description().c_str(), to_string(base.integrator), to_string(base.sampler),
+                threads_used);
 
   // 3. Tables, built once per strategy and shared by every render of it.
   std::map<Strategy, StrategyTables> tables;
@@ -642,6 +643,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["integrator"] = to_string(base.integrator);
   key["max_depth"] = base.integrator == IntegratorKind::Path ? base.max_depth : 1;
   key["heuristic"] = to_string(base.heuristic);
+  key["sampler"] = to_string(base.sampler);
   key["strategy"] = to_string(ref_strategy);
   key["spp"] = ref_spp;
   key["seed"] = ref_seed;
@@ -865,6 +867,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["integrator"] = to_string(base.integrator);
   if (base.integrator == IntegratorKind::Path) j["max_depth"] = base.max_depth;
   j["heuristic"] = to_string(base.heuristic);
+  j["sampler"] = to_string(base.sampler);
   j["width"] = W;
   j["height"] = H;
   j["seed"] = seed;

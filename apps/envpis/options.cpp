@@ -80,6 +80,10 @@ void SceneOptionArgs::add_scene_options(CLI::App& sub) {
 void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--integrator", integrator, "direct or path")->type_name("I")->capture_default_str();
   sub.add_option("--heuristic", heuristic, "MIS heuristic: power or balance")->type_name("H")->capture_default_str();
+  sub.add_option("--sampler", sampler,
+                 "random numbers: sobol (Owen-scrambled Sobol, stratified per pixel) or independent")
+      ->type_name("S")
+      ->capture_default_str();
   sub.add_option("--max-depth", max_depth, "path integrator: maximum bounces")->type_name("INT")->capture_default_str();
   sub.add_option("--threads", threads, "worker threads (0: all)")->type_name("INT")->capture_default_str();
   sub.add_option("--top", top, "light table: top-level cells per side (env, mis, mis-comp, product), 1..256")
@@ -110,6 +114,11 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   closed_surfaces_override();
   o.integrator = parse_integrator(integrator);
   o.heuristic = parse_heuristic(heuristic);
+  try {
+    o.sampler = parse_sampler(sampler);
+  } catch (const Error& e) {
+    throw Error(std::string("--sampler: ") + e.what());
+  }
   o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
   o.threads = static_cast<int>(parse_integer("--threads", threads, 0, 4096));
   o.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));

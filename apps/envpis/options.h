@@ -36,6 +36,7 @@ struct SceneOptionArgs {
   std::string env, env_rotation = "0", env_scale = "1";
   std::string integrator;
   std::string heuristic = "power";
+  std::string sampler = "sobol";
   std::string max_depth = "8";
   std::string threads = "0";
   std::string top = "12";
@@ -47,7 +48,7 @@ struct SceneOptionArgs {
 
   /// --scene, --env, --env-rotation, --env-scale.
   void add_scene_options(CLI::App& sub);
-  /// --integrator, --heuristic, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix,
+  /// --integrator, --heuristic, --sampler, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix,
   /// --closed-surfaces.
   void add_sampling_options(CLI::App& sub);
   /// Parses the sampling options into `o` (throws Error naming the option).

@@ -99,7 +99,7 @@ void run(const RenderArgs& a) {
   std::printf("spp          %d (seed %llu)\n", r.spp, static_cast<unsigned long long>(o.seed));
   std::printf("strategy     %s, integrator %s", to_string(o.strategy), to_string(o.integrator));
   if (o.integrator == IntegratorKind::Path) std::printf(" (max depth %d)", o.max_depth);
-  std::printf(", heuristic %s\n", to_string(o.heuristic));
+  std::printf(", heuristic %s, sampler %s\n", to_string(o.heuristic), to_string(o.sampler));
   std::printf("wall seconds %.3f (tables %.3f s; CPU %.3f s)\n", r.seconds, r.setup_seconds, r.cpu_seconds);
   std::printf("samples/s    %.4g\n", r.seconds > 0 ? double(r.samples) / r.seconds : 0.0);
   if (r.nonfinite_pixels > 0) std::printf("non-finite   %zu pixels set to 0\n", r.nonfinite_pixels);
