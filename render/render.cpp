@@ -39,6 +39,10 @@ void validate(const RenderOptions& o) {
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
   if (o.top_resolution < 1 || o.top_resolution > 256)
     throw Error("top resolution must be in 1..256, got " + std::to_string(o.top_resolution));
+  if (!(o.peak_ratio == 0 || (o.peak_ratio >= 1 && o.peak_ratio <= 1e6f)))
+    throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
+  if (o.tables && o.tables->table && o.tables->peak_ratio != o.peak_ratio)
+    throw Error("prebuilt tables have another peak ratio");
   if (o.tables && o.tables->strategy != o.strategy)
     throw Error(std::string("prebuilt tables are for strategy ") + to_string(o.tables->strategy) + ", not " +
                 to_string(o.strategy));
@@ -72,7 +76,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const StrategyTables* tables = options.tables;
   if (!tables) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
-                                options.top_resolution);
+                                options.top_resolution, options.peak_ratio);
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }

@@ -47,6 +47,9 @@ struct RenderOptions {
   ProductSamplerOptions product;
   /// Top-level cells per side of the light table (env, mis, mis-comp, product): 1..256, the paper's 12.
   int top_resolution = ImportanceTableOptions{}.top_resolution;
+  /// Light tables: each texel's importance is at least 1/peak_ratio of the radiance eval reaches in it
+  /// (ImportanceTableOptions::peak_ratio); 0 turns the bound off.
+  float peak_ratio = ImportanceTableOptions{}.peak_ratio;
   /// Prebuilt tables for this strategy and the scene's environment (e.g. shared between renders);
   /// null: render() builds them (their time is reported in setup_seconds, not seconds).
   const StrategyTables* tables = nullptr;

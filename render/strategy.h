@@ -55,11 +55,14 @@ struct StrategyTables {
   /// Top-level cells per side of the light table of env, mis, mis-comp and product (the oracle's is
   /// oracle.resolution).
   int top_resolution = ImportanceTableOptions{}.top_resolution;
+  /// The light tables' peak bound (ImportanceTableOptions::peak_ratio; the oracle's table too).
+  float peak_ratio = ImportanceTableOptions{}.peak_ratio;
 
   /// Throws Error for invalid options (top_resolution and oracle.resolution: 1..256).
   static StrategyTables build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle = {},
                               const ProductSamplerOptions& product = {},
-                              int top_resolution = ImportanceTableOptions{}.top_resolution);
+                              int top_resolution = ImportanceTableOptions{}.top_resolution,
+                              float peak_ratio = ImportanceTableOptions{}.peak_ratio);
 };
 
 /// The shading point a light sampler prepares for.

@@ -11,6 +11,7 @@
 
 #include "distribution_util.h"
 #include "envpis/equal_area.h"
+#include "texel_peak.h"
 
 #define ENVPIS_KERNEL_NS scalar
 #include "kernels_impl.inl"
@@ -31,6 +32,8 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     throw Error("fine resolution must be 0 (automatic) or in 1.." + std::to_string(kMaxFine));
   if (!(options.floor >= 0.0f && options.floor < 1.0f))
     throw Error("importance floor must be in [0, 1)");
+  if (!(options.peak_ratio == 0.0f || (options.peak_ratio >= 1.0f && options.peak_ratio <= 1e6f)))
+    throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
   T_ = options.top_resolution;
   int n = options.fine_resolution;
   if (n == 0) {
@@ -43,7 +46,7 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     F_ = kMaxFine / T_;
     N_ = T_ * F_;
   }
-  build_importance(map, options.floor, options.compensated);
+  build_importance(map, options.floor, options.peak_ratio, options.compensated);
   build_cells();
   build_cones();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -56,7 +59,7 @@ std::size_t ImportanceTable::texel_index(int x, int y) const {
 
 float ImportanceTable::importance(int x, int y) const { return func_[texel_index(x, y)]; }
 
-void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, bool compensated) {
+void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated) {
   const std::size_t total = static_cast<std::size_t>(N_) * N_;
   // The cell-major texel index is separable: index(x, y) = row_base[y] + col_base[x].
   std::vector<std::uint32_t> row_base(N_), col_base(N_);
@@ -266,13 +269,23 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, b
   // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
   // (so a texel that sees light by either route keeps a positive density).
   func_.assign(total, 0.0f);
-  double sum = 0;
   for (std::size_t i = 0; i < total; ++i) {
     const double sp = splat[i] / table_texel_sr, ga = gather[i];
     double v = small_source[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
     func_[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
-    sum += func_[i];
   }
+  // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
+  if (peak_ratio > 0) {
+    const std::vector<float> peaks = detail::texel_peaks(map, lum, N_);
+    const float inv_k = 1.0f / peak_ratio;
+    for (int y = 0; y < N_; ++y)
+      for (int x = 0; x < N_; ++x) {
+        float& v = func_[index(x, y)];
+        v = std::max(v, peaks[static_cast<std::size_t>(y) * N_ + x] * inv_k);
+      }
+  }
+  double sum = 0;
+  for (float v : func_) sum += v;
   empty_ = !(sum > 0) || !std::isfinite(sum);
   if (empty_) {
     std::fill(func_.begin(), func_.end(), 0.0f);

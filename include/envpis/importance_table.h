@@ -33,6 +33,10 @@ struct ImportanceTableOptions {
   int top_resolution = 12;  ///< T, 1..256
   int fine_resolution = 0;  ///< N; 0 = derived from the map's texel count (see above)
   float floor = 1e-4f;      ///< minimum texel importance, relative to the mean (0 disables; < 1)
+  /// K: every texel's importance is at least 1/K of the largest radiance (channel average) the map's
+  /// bilinear reconstruction reaches inside the texel, so no light sample weighs more than K times
+  /// the map's integral (see the guarantee above). 0 turns the bound off; otherwise in [1, 1e6].
+  float peak_ratio = 8.0f;
   /// MIS-compensated importance (Karlik et al. 2019): max(0, importance - mean), no floor. Only for use
   /// with MIS next to BSDF sampling: its density is zero wherever the map is darker than its mean.
   /// A constant map falls back to the uncompensated table.
@@ -102,7 +106,7 @@ class ImportanceTable {
   int padded_cell_count() const { return padded_; }
 
  private:
-  void build_importance(const EnvironmentMap& map, float floor, bool compensated);
+  void build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated);
   void build_cells();
   void build_cones();
   std::size_t texel_index(int x, int y) const;  // index into func_/cdf_ (cell-major layout)

@@ -1,0 +1,160 @@
+#include "texel_peak.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "envpis/equal_area.h"
+
+namespace envpis::detail {
+
+namespace {
+
+// Range maximum over the columns of each row: one bottom-up max tree per row (leaves padded to a power
+// of two), so a query over any column range costs O(log width).
+class RowMaxTree {
+ public:
+  RowMaxTree(const std::vector<float>& lum, int w, int h) : w_(w), leaves_(1) {
+    while (leaves_ < w) leaves_ *= 2;
+    tree_.assign(static_cast<std::size_t>(h) * 2 * leaves_, 0.0f);
+    for (int y = 0; y < h; ++y) {
+      float* t = row(y);
+      std::copy_n(&lum[static_cast<std::size_t>(y) * w], w, t + leaves_);
+      for (int i = leaves_ - 1; i >= 1; --i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
+    }
+  }
+  /// Max over columns [a, b] of row y, 0 <= a <= b < width.
+  float query(int y, int a, int b) const {
+    const float* t = row(y);
+    float m = 0;
+    for (a += leaves_, b += leaves_ + 1; a < b; a >>= 1, b >>= 1) {
+      if (a & 1) m = std::max(m, t[a++]);
+      if (b & 1) m = std::max(m, t[--b]);
+    }
+    return m;
+  }
+  /// Max over columns [a, b] taken modulo the width (a range that crosses the seam wraps around).
+  float query_wrapped(int y, int a, int b) const {
+    if (b - a + 1 >= w_) return query(y, 0, w_ - 1);
+    a = ((a % w_) + w_) % w_;
+    b = ((b % w_) + w_) % w_;
+    return a <= b ? query(y, a, b) : std::max(query(y, a, w_ - 1), query(y, 0, b));
+  }
+
+ private:
+  float* row(int y) { return &tree_[static_cast<std::size_t>(y) * 2 * leaves_]; }
+  const float* row(int y) const { return &tree_[static_cast<std::size_t>(y) * 2 * leaves_]; }
+  int w_, leaves_;
+  std::vector<float> tree_;
+};
+
+// The outline of a texel: corners and edge midpoints, in texel units.
+constexpr int kOutline = 8;
+constexpr float kOutlineX[kOutline] = {0, 0.5f, 1, 1, 1, 0.5f, 0, 0};
+constexpr float kOutlineY[kOutline] = {0, 0, 0, 0.5f, 1, 1, 1, 0.5f};
+
+// Texel range [lo, hi] whose bilinear footprints can reach pixel coordinates [a, b]: the margin covers
+// the outline's curvature between its sample points.
+void footprint(float a, float b, int& lo, int& hi) {
+  const float margin = 0.05f + 0.25f * (b - a);
+  lo = static_cast<int>(std::floor(a - margin));
+  hi = static_cast<int>(std::floor(b + margin)) + 1;
+}
+
+// Whether the outline's azimuths (in turns, [0, 1)) wind once around a pole: the texel contains it.
+// A step of nearly half a turn means the pole lies on the outline, between two of its points.
+bool winds_around_pole(const float* us) {
+  float turns = 0;
+  for (int k = 0; k < kOutline; ++k) {
+    float d = us[(k + 1) % kOutline] - us[k];
+    d -= std::round(d);
+    if (std::fabs(d) > 0.4f) return true;
+    turns += d;
+  }
+  return std::fabs(turns) > 0.5f;
+}
+
+}  // namespace
+
+std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
+  const int w = map.width(), h = map.height();
+  const bool latlong = map.layout() != MapLayout::EqualArea;
+  const RowMaxTree tree(lum, w, h);
+  const float map_max = *std::max_element(lum.begin(), lum.end());
+  // An outline point this close to a lat-long pole (a thousandth of a texel side) has no usable azimuth.
+  const float pole_z = std::cos(1e-3f * std::sqrt(4.0f * kPi) / float(N));
+  std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, N), [&](const tbb::blocked_range<int>& rows) {
+    const std::size_t m = static_cast<std::size_t>(N) * kOutline;
+    std::vector<float> su(m), sv(m), dx(m), dy(m), dz(m);
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < N; ++x)
+        for (int k = 0; k < kOutline; ++k) {
+          su[x * kOutline + k] = (float(x) + kOutlineX[k]) / float(N);
+          sv[x * kOutline + k] = (float(y) + kOutlineY[k]) / float(N);
+        }
+      equal_area_square_to_sphere(m, su.data(), sv.data(), dx.data(), dy.data(), dz.data());
+      for (int x = 0; x < N; ++x) {
+        float umin = 2, umax = -2, vmin = 2, vmax = -2, us[kOutline];
+        bool north = false, south = false;
+        float zsum = 0;
+        for (int k = 0; k < kOutline; ++k) {
+          const std::size_t i = static_cast<std::size_t>(x) * kOutline + k;
+          const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
+          const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
+          us[k] = p.x;
+          vmin = std::min(vmin, p.y);
+          vmax = std::max(vmax, p.y);
+          zsum += md.z;
+          north = north || md.z > pole_z;
+          south = south || md.z < -pole_z;
+        }
+        for (float u : us) umin = std::min(umin, u), umax = std::max(umax, u);
+        float peak;
+        if (latlong && !north && !south && winds_around_pole(us)) (zsum > 0 ? north : south) = true;
+        if (latlong) {
+          if (umax - umin > 0.5f) {  // the outline crosses the seam: unwrap
+            umin = 2, umax = -2;
+            for (float u : us) {
+              const float uu = u < 0.5f ? u + 1.0f : u;
+              umin = std::min(umin, uu), umax = std::max(umax, uu);
+            }
+          }
+          if (north) vmin = 0;
+          if (south) vmax = 1;
+          int c0, c1, r0, r1;
+          footprint(umin * w - 0.5f, umax * w - 0.5f, c0, c1);
+          footprint(vmin * h - 0.5f, vmax * h - 0.5f, r0, r1);
+          if (north || south) c0 = 0, c1 = w - 1;
+          r0 = std::max(r0, 0);
+          r1 = std::min(r1, h - 1);
+          peak = 0;
+          for (int r = r0; r <= r1; ++r) peak = std::max(peak, tree.query_wrapped(r, c0, c1));
+        } else if (umax - umin > 0.5f || vmax - vmin > 0.5f) {
+          peak = map_max;  // the outline crosses the map square's folded edge (rotated maps only)
+        } else {
+          int c0, c1, r0, r1;
+          footprint(umin * w - 0.5f, umax * w - 0.5f, c0, c1);
+          footprint(vmin * h - 0.5f, vmax * h - 0.5f, r0, r1);
+          peak = 0;
+          for (int r = r0; r <= r1; ++r)
+            for (int c = c0; c <= c1; ++c) {  // past the square's edge, the texels eval's look-up reads
+              int xi = c, yi = r;
+              if (!equal_area_wrap(w, xi, yi)) {
+                xi = std::clamp(xi, 0, w - 1);
+                yi = std::clamp(yi, 0, h - 1);
+              }
+              peak = std::max(peak, lum[static_cast<std::size_t>(yi) * w + xi]);
+            }
+        }
+        peaks[static_cast<std::size_t>(y) * N + x] = peak;
+      }
+    }
+  });
+  return peaks;
+}
+
+}  // namespace envpis::detail

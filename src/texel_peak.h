@@ -1,0 +1,26 @@
+// Internal: an upper bound of what the map's reconstruction (EnvironmentMap::eval, bilinear) returns
+// inside each texel of an N x N grid over the world's equal-area square.
+//
+// Why: the table's importance is an average over each texel, and a small bright source (a sun) whose
+// bilinear footprint reaches into a texel without raising its average much would be sampled with a
+// tiny density and enormous weight L / p (a firefly). ImportanceTable raises every texel to at least
+// its peak divided by a fixed ratio, which bounds every light sample's weight.
+//
+// How: a texel's outline (corners and edge midpoints) is mapped into the map's pixel coordinates; the
+// bounding box of those points, widened by a margin for the outline's curvature and by the bilinear
+// footprint, contains every map texel that can contribute inside the texel. The peak is the largest of
+// those texels, found with a per-row max tree. Texels near a lat-long map's poles take the whole
+// azimuth range; lat-long seams are unwrapped.
+#pragma once
+
+#include <vector>
+
+#include "envpis/environment_map.h"
+
+namespace envpis::detail {
+
+/// `lum` holds the map's per-texel importance (channel average), row-major, width * height.
+/// Returns N * N peaks, row-major over the equal-area square (y down).
+std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N);
+
+}  // namespace envpis::detail
