@@ -11,10 +11,18 @@
 // ImportanceTableOptions::fine_resolution sets it (rounded up to a multiple of T).
 //
 // Importance of a fine texel: the average of the RGB channels of the radiance, averaged over the
-// texel by 2x2 (or more) stratified bilinear look-ups, and at least the solid-angle-weighted average of
-// the map texels whose centres fall inside it (so a single bright texel smaller than a table texel is
-// never missed), and at least `floor` times the mean importance: the density is then positive in
-// every direction, which keeps environment-only sampling unbiased wherever radiance is positive.
+// texel by stratified bilinear look-ups (or, where map texels are much smaller than table texels, by
+// splatting their energy), then raised to at least 1/K of the largest channel-average radiance that
+// EnvironmentMap::eval can return anywhere inside the texel (K = ImportanceTableOptions::peak_ratio),
+// and to at least `floor` times the mean importance.
+//
+// Guarantee (uncompensated tables, K > 0): for every direction d,
+//     eval(d).average() / pdf(d) <= K * integral(),
+// so no environment light sample weighs more than K perfect ones: a small bright sun that the average
+// misses cannot make a firefly. The price is that a source much smaller than a table texel draws more
+// samples than its energy share (at most its bounding texels' area times its radiance / K).
+// The floor keeps the density positive in every direction, so environment-only sampling is unbiased
+// wherever radiance is positive.
 //
 // Memory: N^2 importance values + N^2 cumulative values (floats) + a few floats per top cell: no more
 // than a standard single-level 2D table (values + conditional CDFs + marginal) over N^2 texels, plus
