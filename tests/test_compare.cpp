@@ -1,8 +1,10 @@
 // `envpis compare`, run as a command: clean one-line errors for bad options, and a small comparison
-// whose metrics.json is checked against the images it wrote (relMSE recomputed from the EXR files with
-// OpenImageIO, per image and per object), the reference cache, and the report files.
+// whose metrics.json is checked against the images it wrote (relMSE and the tail recomputed from the EXR
+// files with OpenImageIO, per image and per object), the reference cache, and the report files. Also its
+// image metrics (apps/envpis/metrics.cpp) on a hand-built image.
 #include <gtest/gtest.h>
 #include "cli_util.h"
+#include "metrics.h"
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -41,6 +43,45 @@ std::vector<float> read_rgb(const fs::path& path, int* w, int* h, int channels =
   std::vector<float> px(static_cast<std::size_t>(*w) * *h * channels);
   if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) return {};
   return px;
+}
+
+// Five pixels with known errors against a grey reference of 1 (pixel 3: black): exact, 9x off, 11x off,
+// 0.5 over black, and one channel 21x off. Only pixels 2 and 4 are more than 10x off (e > 100).
+TEST(CompareMetrics, TailOfAHandBuiltImage) {
+  using namespace envpis::app;
+  const std::vector<float> ref{1, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1};
+  const std::vector<float> img{1, 1, 1, 10, 10, 10, 12, 12, 12, 0.5f, 0.5f, 0.5f, 1, 1, 22};
+  const std::vector<float> var(5, 0.0f);
+  const std::vector<int> ids{0, 0, 1, -1, 1};
+  const ImageMetrics m = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {0, 1});
+  const double e[5] = {0, 81 / 1.01, 121 / 1.01, 0.25 / 0.01, 441 / 1.01 / 3};
+  auto near = [](double want) { return 1e-12 * want; };
+  ASSERT_EQ(m.per_pixel.size(), 5u);
+  for (int p = 0; p < 5; ++p) EXPECT_NEAR(m.per_pixel[p], e[p], 1e-6 * e[p]) << p;
+  EXPECT_EQ(m.image.pixels, 5u);
+  EXPECT_NEAR(m.image.relmse, (e[1] + e[2] + e[3] + e[4]) / 5, near(e[4]));
+  EXPECT_NEAR(m.image.max_rel_sq_error, e[4], near(e[4]));
+  EXPECT_EQ(m.image.pixels_over_10x, 2u);
+  ASSERT_EQ(m.regions.size(), 2u);
+  EXPECT_NEAR(m.regions[0].relmse, e[1] / 2, near(e[1]));
+  EXPECT_NEAR(m.regions[0].max_rel_sq_error, e[1], near(e[1]));
+  EXPECT_EQ(m.regions[0].pixels_over_10x, 0u) << "9x off is not more than 10x off";
+  EXPECT_NEAR(m.regions[1].relmse, (e[2] + e[4]) / 2, near(e[4]));
+  EXPECT_NEAR(m.regions[1].max_rel_sq_error, e[4], near(e[4]));
+  EXPECT_EQ(m.regions[1].pixels_over_10x, 2u);
+  // An object with no pixel: NaN metrics, no pixel over.
+  const ImageMetrics none = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {7});
+  EXPECT_TRUE(std::isnan(none.regions[0].relmse));
+  EXPECT_TRUE(std::isnan(none.regions[0].max_rel_sq_error));
+  EXPECT_EQ(none.regions[0].pixels_over_10x, 0u);
+}
+
+TEST(CompareMetrics, Median) {
+  using envpis::app::median;
+  EXPECT_EQ(median({3, 1, 2}), 2);
+  EXPECT_EQ(median({4, 1, 3, 2}), 2.5);
+  EXPECT_EQ(median({5}), 5);
+  EXPECT_TRUE(std::isnan(median({})));
 }
 
 class CompareCommand : public ::testing::Test {
@@ -125,35 +166,46 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
     ASSERT_TRUE(m[block].is_object()) << block;
     ASSERT_EQ(m[block]["strategies"].size(), 3u) << block;
     for (const auto& s : m[block]["strategies"]) {
-      for (const char* k : {"spp", "seconds", "relmse", "efficiency", "mean", "nan_count", "regions"})
+      for (const char* k : {"spp", "seconds", "relmse", "efficiency", "mean", "nan_count", "regions", "max_rel_sq_error",
+                            "pixels_over_10x"})
         EXPECT_TRUE(s.contains(k)) << block << " " << s["strategy"] << " lacks " << k;
       int w = 0, h = 0;
       const std::vector<float> img = read_rgb(out / s["images"]["exr"].get<std::string>(), &w, &h);
       ASSERT_EQ(img.size(), ref.size());
-      double total = 0;
-      std::vector<double> region_sum(8, 0), region_n(8, 0);
+      double total = 0, max_e = 0;
+      int over = 0;
+      std::vector<double> region_sum(8, 0), region_n(8, 0), region_max(8, 0), region_over(8, 0);
       for (std::size_t p = 0; p < ids.size(); ++p) {
         double e = 0;
         for (int c = 0; c < 3; ++c) {
           const double I = img[p * 3 + c], R = ref[p * 3 + c];
           e += (I - R) * (I - R) / (R * R + 0.01);
         }
-        total += e / 3;
+        e /= 3;
+        total += e;
+        max_e = std::max(max_e, e);
+        over += e > 100;
         const int id = static_cast<int>(ids[p]);
         if (id >= 0 && id < 8) {
-          region_sum[id] += e / 3;
+          region_sum[id] += e;
           region_n[id] += 1;
+          region_max[id] = std::max(region_max[id], e);
+          region_over[id] += e > 100;
         }
       }
       const double relmse = total / double(ids.size());
       EXPECT_NEAR(s["relmse"].get<double>(), relmse, 1e-6 * relmse + 1e-12) << block << " " << s["strategy"];
       EXPECT_NEAR(s["efficiency"].get<double>(), 1.0 / (relmse * s["seconds"].get<double>()),
                   1e-4 * s["efficiency"].get<double>());
+      EXPECT_NEAR(s["max_rel_sq_error"].get<double>(), max_e, 1e-6 * max_e) << block << " " << s["strategy"];
+      EXPECT_EQ(s["pixels_over_10x"].get<int>(), over) << block << " " << s["strategy"];
       for (const auto& reg : s["regions"]) {
         const int id = reg["id"];
         ASSERT_GT(region_n[id], 0);
         const double want = region_sum[id] / region_n[id];
         EXPECT_NEAR(reg["relmse"].get<double>(), want, 1e-6 * want + 1e-12) << s["strategy"] << " region " << id;
+        EXPECT_NEAR(reg["max_rel_sq_error"].get<double>(), region_max[id], 1e-6 * region_max[id]) << s["strategy"] << " region " << id;
+        EXPECT_EQ(reg["pixels_over_10x"].get<double>(), region_over[id]) << s["strategy"] << " region " << id;
       }
       for (const char* k : {"png", "error_png"}) EXPECT_TRUE(fs::exists(out / s["images"][k].get<std::string>()));
     }

@@ -51,6 +51,7 @@
 #include <vector>
 
 #include "command.h"
+#include "metrics.h"
 #include "options.h"
 #include "envpis/envpis.h"
 #include "render/render.h"
@@ -65,7 +66,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace envpis::render;
 
-constexpr double kRelEpsilon = 0.01;         // relMSE denominator R^2 + 0.01 (DESIGN.md 5)
 constexpr std::uint64_t kRefSeedOffset = 1000003;
 constexpr double kErrLog10Min = -5.0, kErrLog10Max = 1.0;  // false-colour range of the error maps
 
@@ -124,17 +124,6 @@ struct Region {
   double cx = 0, cy = 0;               // centroid (pixel centres)
 };
 
-struct ImageMetrics {
-  double relmse = 0;
-  double relmse_stderr = 0;  // standard error of relmse from the spread of the per-pixel terms
-  double mean = 0;
-  std::vector<double> region_relmse;  // indexed like the region list
-  std::vector<double> region_stderr;
-  std::vector<double> region_mean;
-  std::vector<double> region_z;       // (mean - ref mean) / sqrt(var + ref var), NaN when undefined
-  std::vector<float> per_pixel;       // mean over channels of the relMSE term
-};
-
 struct Reference {
   int width = 0, height = 0, spp = 0;
   std::vector<float> rgb, variance;
@@ -145,77 +134,10 @@ struct Reference {
   bool cached = false;
 };
 
-ImageMetrics measure(const std::vector<float>& rgb, const std::vector<float>& variance, const Reference& ref,
-                     const std::vector<Region>& regions) {
-  ImageMetrics m;
-  const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
-  m.per_pixel.assign(npix, 0.0f);
-  const std::size_t nr = regions.size();
-  std::vector<double> rsum(nr, 0), rsum2(nr, 0), rmean(nr, 0), rvar(nr, 0), refmean(nr, 0), refvar(nr, 0);
-  std::vector<std::size_t> rcount(nr, 0);
-  std::map<int, std::size_t> region_index;
-  for (std::size_t i = 0; i < nr; ++i) region_index[regions[i].id] = i;
-  double total = 0, total2 = 0, sum = 0;
-  for (std::size_t p = 0; p < npix; ++p) {
-    double e = 0, avg = 0, ravg = 0;
-    for (int c = 0; c < 3; ++c) {
-      const double I = rgb[p * 3 + c], R = ref.rgb[p * 3 + c];
-      e += (I - R) * (I - R) / (R * R + kRelEpsilon);
-      avg += I;
-      ravg += R;
-    }
-    e /= 3;
-    m.per_pixel[p] = static_cast<float>(e);
-    total += e;
-    total2 += e * e;
-    sum += avg / 3;
-    auto it = region_index.find(ref.object_id[p]);
-    if (it != region_index.end()) {
-      const std::size_t r = it->second;
-      rsum[r] += e;
-      rsum2[r] += e * e;
-      rcount[r] += 1;
-      rmean[r] += avg / 3;
-      rvar[r] += variance[p];
-      refmean[r] += ravg / 3;
-      refvar[r] += ref.variance[p];
-    }
-  }
-  // Standard error of a mean of n independent per-pixel terms: sqrt(sample variance / n).
-  auto stderr_of = [](double s1, double s2, double n) {
-    return n > 1 ? std::sqrt(std::max(0.0, (s2 - s1 * s1 / n) / (n - 1)) / n) : std::nan("");
-  };
-  m.relmse = total / double(npix);
-  m.relmse_stderr = stderr_of(total, total2, double(npix));
-  m.mean = sum / double(npix);
-  for (std::size_t r = 0; r < nr; ++r) {
-    const double n = double(rcount[r]);
-    if (n == 0) {
-      m.region_relmse.push_back(std::nan(""));
-      m.region_stderr.push_back(std::nan(""));
-      m.region_mean.push_back(std::nan(""));
-      m.region_z.push_back(std::nan(""));
-      continue;
-    }
-    m.region_relmse.push_back(rsum[r] / n);
-    m.region_stderr.push_back(stderr_of(rsum[r], rsum2[r], n));
-    m.region_mean.push_back(rmean[r] / n);
-    const double var = (rvar[r] + refvar[r]) / (n * n);
-    m.region_z.push_back(var > 0 ? (rmean[r] - refmean[r]) / n / std::sqrt(var) : std::nan(""));
-  }
-  return m;
-}
-
-/// relMSE the reference's own noise adds to every measurement: mean over pixels of var(R)/(R^2+0.01),
-/// with var the per-pixel variance of the mean of the channels (the renderer's variance AOV).
-double reference_floor(const Reference& ref) {
-  const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
-  double total = 0;
-  for (std::size_t p = 0; p < npix; ++p) {
-    const double R = (double(ref.rgb[p * 3]) + ref.rgb[p * 3 + 1] + ref.rgb[p * 3 + 2]) / 3;
-    total += ref.variance[p] / (R * R + kRelEpsilon);
-  }
-  return total / double(npix);
+ImageMetrics measure_image(const RenderResult& r, const Reference& ref, const std::vector<Region>& regions) {
+  std::vector<int> ids;
+  for (const Region& g : regions) ids.push_back(g.id);
+  return measure(NoisyImage{r.rgb, r.variance}, NoisyImage{ref.rgb, ref.variance}, ref.object_id, ids);
 }
 
 void write_png(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb8) {
@@ -489,16 +411,23 @@ class Progress {
   std::chrono::steady_clock::time_point t0_;
 };
 
+json num(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+
+/// Per object: relMSE, its standard error and the mean; `with_z` adds the bias z-score and the tail.
 json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, bool with_z) {
   json arr = json::array();
   for (std::size_t i = 0; i < regions.size(); ++i) {
-    json r;
-    r["id"] = regions[i].id;
-    r["name"] = regions[i].name;
-    r["relmse"] = std::isfinite(m.region_relmse[i]) ? json(m.region_relmse[i]) : json(nullptr);
-    r["relmse_stderr"] = std::isfinite(m.region_stderr[i]) ? json(m.region_stderr[i]) : json(nullptr);
-    r["mean"] = std::isfinite(m.region_mean[i]) ? json(m.region_mean[i]) : json(nullptr);
-    if (with_z) r["z"] = std::isfinite(m.region_z[i]) ? json(m.region_z[i]) : json(nullptr);
+    const PixelSetMetrics& g = m.regions[i];
+    json r = {{"id", regions[i].id},
+              {"name", regions[i].name},
+              {"relmse", num(g.relmse)},
+              {"relmse_stderr", num(g.relmse_stderr)},
+              {"mean", num(g.mean)}};
+    if (with_z) {
+      r["z"] = num(g.z);
+      r["max_rel_sq_error"] = num(g.max_rel_sq_error);
+      r["pixels_over_10x"] = g.pixels_over_10x;
+    }
     arr.push_back(r);
   }
   return arr;
@@ -511,10 +440,12 @@ json measured_json(const Measured& x, const std::vector<Region>& regions) {
   j["seconds"] = x.seconds;
   j["seconds_runs"] = x.seconds_runs;
   j["cpu_seconds"] = x.cpu_seconds;
-  j["relmse"] = x.metrics.relmse;
-  j["relmse_stderr"] = x.metrics.relmse_stderr;
-  j["efficiency"] = x.metrics.relmse > 0 && x.seconds > 0 ? json(1.0 / (x.metrics.relmse * x.seconds)) : json(nullptr);
-  j["mean"] = x.metrics.mean;
+  j["relmse"] = x.metrics.image.relmse;
+  j["relmse_stderr"] = x.metrics.image.relmse_stderr;
+  j["efficiency"] = x.metrics.image.relmse > 0 && x.seconds > 0 ? json(1.0 / (x.metrics.image.relmse * x.seconds)) : json(nullptr);
+  j["mean"] = x.metrics.image.mean;
+  j["max_rel_sq_error"] = num(x.metrics.image.max_rel_sq_error);
+  j["pixels_over_10x"] = x.metrics.image.pixels_over_10x;
   j["nan_count"] = x.nan_count;
   j["regions"] = regions_json(regions, x.metrics, true);
   j["images"] = {{"exr", "images/" + x.stem + ".exr"},
@@ -749,7 +680,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
     for (const Measured& m : eq_spp)
       progress.line("equal spp: %-8s %.3f s (min of %zu runs)", to_string(m.strategy), m.seconds, m.seconds_runs.size());
   for (std::size_t i = 0; i < eq_spp.size(); ++i)
-    eq_spp[i].metrics = measure(eq_images[i].rgb, eq_images[i].variance, ref, regions);
+    eq_spp[i].metrics = measure_image(eq_images[i], ref, regions);
 
   // 6. Overhead of product over mis at equal spp (same run, same threads).
   auto find_eq = [&](Strategy s) -> const Measured* {
@@ -781,12 +712,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
       json series = json::array();
       for (int n : points) {
         RenderResult r = do_render(s, n, seed, std::string("convergence: ") + to_string(s) + " @ " + std::to_string(n));
-        const ImageMetrics mm = measure(r.rgb, r.variance, ref, regions);
-        series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.relmse}, {"regions", regions_json(regions, mm, false)}});
+        const ImageMetrics mm = measure_image(r, ref, regions);
+        series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.image.relmse}, {"regions", regions_json(regions, mm, false)}});
       }
       series.push_back({{"spp", spp},
                         {"seconds", eq_spp[i].seconds},
-                        {"relmse", eq_spp[i].metrics.relmse},
+                        {"relmse", eq_spp[i].metrics.image.relmse},
                         {"regions", regions_json(regions, eq_spp[i].metrics, false)}});
       convergence[to_string(s)] = series;
       progress.line("convergence: %-8s %zu points", to_string(s), points.size() + 1);
@@ -816,7 +747,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
       m.seconds = r.seconds;
       m.cpu_seconds = r.cpu_seconds;
       m.nan_count = r.nonfinite_pixels;
-      m.metrics = measure(r.rgb, r.variance, ref, regions);
+      m.metrics = measure_image(r, ref, regions);
       progress.line("equal time: %-8s %d spp  %.3f s (budget %.3f s)", to_string(e.strategy), n, r.seconds, budget);
       time_images.push_back(std::move(r));
       eq_time.push_back(std::move(m));
@@ -872,6 +803,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["hardware_threads"] = std::thread::hardware_concurrency();
   j["relmse_definition"] = "mean over pixels and channels of (I - R)^2 / (R^2 + 0.01)";
   j["efficiency_definition"] = "1 / (relmse * seconds), seconds = wall time of the sampling loop";
+  j["tail_definition"] = "per-pixel relative squared error e = mean over channels of (I - R)^2 / (R^2 + 0.01); "
+                         "max_rel_sq_error = the largest e; pixels_over_10x = the number of pixels with e > 100";
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
@@ -892,7 +825,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
                     {"seconds", ref.seconds},
                     {"cached", ref.cached},
                     {"cache_dir", cache_dir},
-                    {"relmse_floor", reference_floor(ref)},
+                    {"relmse_floor", reference_floor(NoisyImage{ref.rgb, ref.variance})},
                     {"exr", "images/reference.exr"},
                     {"png", "images/reference.png"},
                     {"object_id_exr", "images/object-id.exr"}};
@@ -1002,9 +935,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
     for (const auto& m : ms)
       if (m.strategy == Strategy::Mis) mis = &m;
     for (const auto& m : ms) {
-      const double eff = m.metrics.relmse > 0 && m.seconds > 0 ? 1 / (m.metrics.relmse * m.seconds) : 0;
-      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, m.metrics.relmse, eff);
-      if (mis && m.metrics.relmse > 0) std::printf(" %8.2fx", mis->metrics.relmse / m.metrics.relmse);
+      const double eff = m.metrics.image.relmse > 0 && m.seconds > 0 ? 1 / (m.metrics.image.relmse * m.seconds) : 0;
+      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, m.metrics.image.relmse, eff);
+      if (mis && m.metrics.image.relmse > 0) std::printf(" %8.2fx", mis->metrics.image.relmse / m.metrics.image.relmse);
       std::printf("\n");
     }
   };
