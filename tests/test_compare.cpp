@@ -84,6 +84,25 @@ TEST(CompareMetrics, Median) {
   EXPECT_TRUE(std::isnan(median({})));
 }
 
+// Each pixel's relative squared error, recomputed here from the written images (the command's own
+// computation is in apps/envpis/metrics.cpp).
+std::vector<double> rel_sq_errors(const std::vector<float>& img, const std::vector<float>& ref) {
+  std::vector<double> e(ref.size() / 3, 0.0);
+  for (std::size_t p = 0; p < e.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const double I = img[p * 3 + c], R = ref[p * 3 + c];
+      e[p] += (I - R) * (I - R) / (R * R + 0.01);
+    }
+    e[p] /= 3;
+  }
+  return e;
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
+}
+
 class CompareCommand : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -107,6 +126,11 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --oracle-dirs 3" + o, "square"},
       {"compare --width -5" + o, "--width"},
       {"compare --seed 1 --ref-seed 1" + o, "--ref-seed"},
+      {"compare --seeds 0" + o, "--seeds: must be in 1..64, got '0'"},
+      {"compare --seeds abc" + o, "--seeds: expected an integer in 1..64, got 'abc'"},
+      {"compare --seeds 65" + o, "--seeds: must be in 1..64, got '65'"},
+      {"compare --seeds 2.5" + o, "--seeds: expected an integer in 1..64, got '2.5'"},
+      {"compare --seed 2 --seeds 3 --ref-seed 4" + o, "--ref-seed 4 is one of the measured seeds 2..4 (--seed, --seeds)"},
       {"compare --env /nonexistent/map.exr" + o, "cannot load environment map '/nonexistent/map.exr': no such file"},
       {"compare --scene nosuchscene" + o, "unknown scene"},
       {"compare", "--out is required"},
@@ -175,13 +199,9 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
       double total = 0, max_e = 0;
       int over = 0;
       std::vector<double> region_sum(8, 0), region_n(8, 0), region_max(8, 0), region_over(8, 0);
+      const std::vector<double> errors = rel_sq_errors(img, ref);
       for (std::size_t p = 0; p < ids.size(); ++p) {
-        double e = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double I = img[p * 3 + c], R = ref[p * 3 + c];
-          e += (I - R) * (I - R) / (R * R + 0.01);
-        }
-        e /= 3;
+        const double e = errors[p];
         total += e;
         max_e = std::max(max_e, e);
         over += e > 100;
@@ -239,6 +259,85 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_EQ(m2["equal_spp"]["strategies"][0]["relmse"], m["equal_spp"]["strategies"][0]["relmse"]);
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
+}
+
+// --seeds 3: three independent renders per strategy (seeds 2, 3, 4; the reference's seed 5 is next to
+// them), each seed's relMSE and tail listed, the headline numbers their medians. Each seed's numbers
+// are those of a one-seed run with that seed; the first seed's are those of the images written.
+TEST_F(CompareCommand, SeedsReportMediansOverIndependentRenders) {
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-seeds-" + pid);
+  const fs::path out1 = fs::temp_directory_path() / ("envpis-test-compare-seed3-" + pid);
+  const fs::path cache = fs::temp_directory_path() / ("envpis-test-compare-seeds-cache-" + pid);
+  std::error_code ec;
+  for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
+  // env at 2 spp: the sun's reflections give pixels more than 10x off.
+  const std::string common = "compare --scene fig1 --width 64 --height 12 --spp 2 --ref-spp 64 --strategies env,mis "
+                             "--ref-seed 5 --equal-time auto --repeats 1 --no-convergence --no-plots --quiet "
+                             "--cache-dir '" + cache.string() + "'";
+  const CmdResult r = run(common + " --seed 2 --seeds 3 --out '" + out.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const CmdResult r1 = run(common + " --seed 3 --out '" + out1.string() + "'");
+  ASSERT_EQ(r1.code, 0) << r1.output;
+  json m, m1;
+  std::ifstream(out / "metrics.json") >> m;
+  std::ifstream(out1 / "metrics.json") >> m1;
+  EXPECT_EQ(m["seed"], 2);
+  EXPECT_EQ(m["seeds"], json({2, 3, 4}));
+  EXPECT_EQ(m1["seeds"], json({3}));
+  EXPECT_EQ(m["reference"]["seed"], 5);
+
+  int W = 0, H = 0;
+  const std::vector<float> ref = read_rgb(out / "images" / "reference.exr", &W, &H);
+  ASSERT_EQ(ref.size(), 64u * 12u * 3u);
+  double tail_pixels = 0;
+  for (const char* block : {"equal_spp", "equal_time"}) {
+    ASSERT_TRUE(m[block].is_object()) << block;
+    for (std::size_t i = 0; i < m[block]["strategies"].size(); ++i) {
+      const json& s = m[block]["strategies"][i];
+      const std::string what = std::string(block) + " " + s["strategy"].get<std::string>();
+      std::vector<json> sets{s};
+      for (const json& reg : s["regions"]) sets.push_back(reg);
+      for (const json& x : sets) {
+        for (const char* k : {"relmse", "max_rel_sq_error", "pixels_over_10x"}) {
+          const std::vector<double> v = x[std::string(k) + "_seeds"].get<std::vector<double>>();
+          ASSERT_EQ(v.size(), 3u) << what << " " << k;
+          EXPECT_EQ(x[k].get<double>(), median_of(v)) << what << " " << k;
+          EXPECT_EQ(x[std::string(k) + (k == std::string("relmse") ? "_max" : "_worst")].get<double>(),
+                    *std::max_element(v.begin(), v.end())) << what << " " << k;
+        }
+        const std::vector<double> rel = x["relmse_seeds"].get<std::vector<double>>();
+        EXPECT_EQ(x["relmse_median"], x["relmse"]) << what;
+        EXPECT_EQ(x["relmse_min"].get<double>(), *std::min_element(rel.begin(), rel.end())) << what;
+        EXPECT_TRUE(rel[0] != rel[1] && rel[1] != rel[2] && rel[0] != rel[2]) << what << ": the seeds are not independent";
+      }
+      const double relmse = s["relmse"].get<double>();
+      EXPECT_NEAR(s["efficiency"].get<double>(), 1.0 / (relmse * s["seconds"].get<double>()), 1e-9 * s["efficiency"].get<double>())
+          << what << ": efficiency from the median relMSE";
+      // The first seed's numbers are those of the images written.
+      int w = 0, h = 0;
+      const std::vector<double> e = rel_sq_errors(read_rgb(out / s["images"]["exr"].get<std::string>(), &w, &h), ref);
+      double total = 0, max_e = 0, over = 0;
+      for (double x : e) {
+        total += x;
+        max_e = std::max(max_e, x);
+        over += x > 100;
+      }
+      EXPECT_NEAR(s["relmse_seeds"][0].get<double>(), total / double(e.size()), 1e-6 * total / double(e.size())) << what;
+      EXPECT_NEAR(s["max_rel_sq_error_seeds"][0].get<double>(), max_e, 1e-6 * max_e) << what;
+      EXPECT_EQ(s["pixels_over_10x_seeds"][0].get<double>(), over) << what;
+      tail_pixels += s["pixels_over_10x_worst"].get<double>();
+      // The second seed is seed 3: the same numbers as the one-seed run with --seed 3 (same spp, same reference).
+      const json& s1 = m1[block]["strategies"][i];
+      if (s1["spp"] == s["spp"]) {
+        EXPECT_EQ(s["relmse_seeds"][1], s1["relmse"]) << what;
+        EXPECT_EQ(s["max_rel_sq_error_seeds"][1], s1["max_rel_sq_error"]) << what;
+        EXPECT_EQ(s["pixels_over_10x_seeds"][1], s1["pixels_over_10x"]) << what;
+      }
+    }
+  }
+  EXPECT_GT(tail_pixels, 0) << "env at 2 spp should have pixels more than 10x off: the test does not exercise the count";
+  for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
 }
 
 }  // namespace

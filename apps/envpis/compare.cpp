@@ -19,6 +19,9 @@
 //   minimum over --repeats renders (the images are deterministic; only the timing is repeated).
 //   Convergence: relMSE at spp 1, 2, 4, ... and --spp, each rendered with the same seed (the renderer's
 //   samples are keyed on (seed, pixel, sample), so the series is the prefix of the equal-spp render).
+//   Seeds: with --seeds K every strategy is rendered K times at equal spp (and at equal time), with seeds
+//   --seed ... --seed + K - 1; relMSE, efficiency and the tail (metrics.h) are the medians over the K,
+//   reported with their spread. The images, timings and the convergence series are the first seed's.
 #ifdef ENVPIS_HAVE_RENDER
 
 #include <OpenImageIO/imageio.h>
@@ -67,6 +70,7 @@ using json = nlohmann::json;
 using namespace envpis::render;
 
 constexpr std::uint64_t kRefSeedOffset = 1000003;
+constexpr int kMaxSeeds = 64;
 constexpr double kErrLog10Min = -5.0, kErrLog10Max = 1.0;  // false-colour range of the error maps
 
 struct CompareArgs {
@@ -79,6 +83,7 @@ struct CompareArgs {
   std::string equal_time;
   std::string width = "0", height = "0";  // 0: half the scene camera's size
   std::string seed = "0";
+  std::string seeds = "1";
   std::string repeats = "3";
   std::string cache_dir;
   std::string report_dir;
@@ -387,9 +392,23 @@ struct Measured {
   double cpu_seconds = 0;  // process CPU seconds (all threads), minimum over the runs
   std::vector<double> seconds_runs;
   std::size_t nan_count = 0;
-  ImageMetrics metrics;
+  ImageMetrics metrics;                  // of the first seed, whose image is written and shown
+  std::vector<ImageMetrics> more_seeds;  // of seeds --seed + 1, ... (--seeds > 1), without per_pixel
   std::string stem;  // images/<stem>.{exr,png}, images/<stem>-error.png
 };
+
+/// One number of each seed's metrics, in seed order.
+template <class F>
+std::vector<double> over_seeds(const Measured& m, F f) {
+  std::vector<double> v{double(f(m.metrics))};
+  for (const ImageMetrics& x : m.more_seeds) v.push_back(double(f(x)));
+  return v;
+}
+
+/// The relMSE that compares strategies (and gives the efficiency): the median over the seeds.
+double headline_relmse(const Measured& m) {
+  return median(over_seeds(m, [](const ImageMetrics& x) { return x.image.relmse; }));
+}
 
 class Progress {
  public:
@@ -412,8 +431,10 @@ class Progress {
 };
 
 json num(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+/// A pixel count, or the median of an even number of counts (which may end in .5).
+json count(double x) { return x == std::floor(x) ? json(static_cast<std::uint64_t>(x)) : json(x); }
 
-/// Per object: relMSE, its standard error and the mean; `with_z` adds the bias z-score and the tail.
+/// Per object: relMSE, its standard error and the mean; `with_z` adds the bias z-score.
 json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, bool with_z) {
   json arr = json::array();
   for (std::size_t i = 0; i < regions.size(); ++i) {
@@ -423,14 +444,38 @@ json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, boo
               {"relmse", num(g.relmse)},
               {"relmse_stderr", num(g.relmse_stderr)},
               {"mean", num(g.mean)}};
-    if (with_z) {
-      r["z"] = num(g.z);
-      r["max_rel_sq_error"] = num(g.max_rel_sq_error);
-      r["pixels_over_10x"] = g.pixels_over_10x;
-    }
+    if (with_z) r["z"] = num(g.z);
     arr.push_back(r);
   }
   return arr;
+}
+
+/// Writes NAME = the median of `v` (one value per seed), NAME_seeds = `v`, and the spread: NAME_min and
+/// NAME_max, or for a tail metric only NAME_worst (the largest).
+void put_over_seeds(json& j, const std::string& name, const std::vector<double>& v, json (*as)(double), bool spread) {
+  j[name] = as(median(v));
+  json list = json::array();
+  for (double x : v) list.push_back(as(x));
+  j[name + "_seeds"] = list;
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  if (spread) j[name + "_min"] = as(*lo);
+  j[name + (spread ? "_max" : "_worst")] = as(*hi);
+}
+
+/// relMSE and the tail of one set of pixels (`region` of the regions, or the image for `npos`) over the
+/// seeds: relmse (= relmse_median), relmse_seeds, relmse_min, relmse_max, max_rel_sq_error(_seeds,
+/// _worst), pixels_over_10x(_seeds, _worst).
+void put_seed_statistics(json& j, const Measured& m, std::size_t region) {
+  auto set = [region](const ImageMetrics& x) -> const PixelSetMetrics& {
+    return region == std::string::npos ? x.image : x.regions[region];
+  };
+  const std::vector<double> relmse = over_seeds(m, [&](const ImageMetrics& x) { return set(x).relmse; });
+  put_over_seeds(j, "relmse", relmse, num, true);
+  j["relmse_median"] = j["relmse"];
+  put_over_seeds(j, "max_rel_sq_error", over_seeds(m, [&](const ImageMetrics& x) { return set(x).max_rel_sq_error; }),
+                 num, false);
+  put_over_seeds(j, "pixels_over_10x", over_seeds(m, [&](const ImageMetrics& x) { return set(x).pixels_over_10x; }),
+                 count, false);
 }
 
 json measured_json(const Measured& x, const std::vector<Region>& regions) {
@@ -440,14 +485,14 @@ json measured_json(const Measured& x, const std::vector<Region>& regions) {
   j["seconds"] = x.seconds;
   j["seconds_runs"] = x.seconds_runs;
   j["cpu_seconds"] = x.cpu_seconds;
-  j["relmse"] = x.metrics.image.relmse;
-  j["relmse_stderr"] = x.metrics.image.relmse_stderr;
-  j["efficiency"] = x.metrics.image.relmse > 0 && x.seconds > 0 ? json(1.0 / (x.metrics.image.relmse * x.seconds)) : json(nullptr);
+  put_seed_statistics(j, x, std::string::npos);
+  j["relmse_stderr"] = num(x.metrics.image.relmse_stderr);
+  const double relmse = headline_relmse(x);
+  j["efficiency"] = relmse > 0 && x.seconds > 0 ? json(1.0 / (relmse * x.seconds)) : json(nullptr);
   j["mean"] = x.metrics.image.mean;
-  j["max_rel_sq_error"] = num(x.metrics.image.max_rel_sq_error);
-  j["pixels_over_10x"] = x.metrics.image.pixels_over_10x;
   j["nan_count"] = x.nan_count;
   j["regions"] = regions_json(regions, x.metrics, true);
+  for (std::size_t i = 0; i < regions.size(); ++i) put_seed_statistics(j["regions"][i], x, i);
   j["images"] = {{"exr", "images/" + x.stem + ".exr"},
                  {"png", "images/" + x.stem + ".png"},
                  {"error_png", "images/" + x.stem + "-error.png"}};
@@ -473,9 +518,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
     }
   }();
   const std::uint64_t seed = static_cast<std::uint64_t>(parse_integer("--seed", a.seed, 0, INT64_MAX / 2));
+  const int nseeds = static_cast<int>(parse_integer("--seeds", a.seeds, 1, kMaxSeeds));
   const std::uint64_t ref_seed =
       a.ref_seed.empty() ? seed + kRefSeedOffset : static_cast<std::uint64_t>(parse_integer("--ref-seed", a.ref_seed, 0, INT64_MAX));
-  if (ref_seed == seed) throw Error("--ref-seed must differ from --seed (the reference's noise must be independent)");
+  if (ref_seed >= seed && ref_seed - seed < static_cast<std::uint64_t>(nseeds))
+    throw Error("--ref-seed " + std::to_string(ref_seed) + " is one of the measured seeds " + std::to_string(seed) + ".." +
+                std::to_string(seed + nseeds - 1) + " (--seed, --seeds): the reference's noise must be independent");
   const int repeats = static_cast<int>(parse_integer("--repeats", a.repeats, 1, 100));
   std::optional<double> equal_time;
   bool equal_time_auto = false;
@@ -681,6 +729,18 @@ void run(const CompareArgs& a, const std::string& command_line) {
       progress.line("equal spp: %-8s %.3f s (min of %zu runs)", to_string(m.strategy), m.seconds, m.seconds_runs.size());
   for (std::size_t i = 0; i < eq_spp.size(); ++i)
     eq_spp[i].metrics = measure_image(eq_images[i], ref, regions);
+  // Seeds --seed + 1, ...: their metrics only (the images and the timing are the first seed's).
+  auto measure_more_seeds = [&](Measured& m, const std::string& what) {
+    for (int k = 1; k < nseeds; ++k) {
+      const RenderResult r = do_render(m.strategy, m.spp, seed + k,
+                                       what + ": " + to_string(m.strategy) + " seed " + std::to_string(seed + k));
+      m.more_seeds.push_back(measure_image(r, ref, regions));
+      m.more_seeds.back().per_pixel = {};
+    }
+    if (nseeds > 1)
+      progress.line("%s: %-8s relMSE median %.4g over %d seeds", what.c_str(), to_string(m.strategy), headline_relmse(m), nseeds);
+  };
+  for (Measured& m : eq_spp) measure_more_seeds(m, "equal spp");
 
   // 6. Overhead of product over mis at equal spp (same run, same threads).
   auto find_eq = [&](Strategy s) -> const Measured* {
@@ -749,6 +809,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
       m.nan_count = r.nonfinite_pixels;
       m.metrics = measure_image(r, ref, regions);
       progress.line("equal time: %-8s %d spp  %.3f s (budget %.3f s)", to_string(e.strategy), n, r.seconds, budget);
+      measure_more_seeds(m, "equal time");
       time_images.push_back(std::move(r));
       eq_time.push_back(std::move(m));
     }
@@ -799,12 +860,18 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["width"] = W;
   j["height"] = H;
   j["seed"] = seed;
+  j["seeds"] = json::array();
+  for (int k = 0; k < nseeds; ++k) j["seeds"].push_back(seed + k);
   j["threads"] = threads_used;
   j["hardware_threads"] = std::thread::hardware_concurrency();
   j["relmse_definition"] = "mean over pixels and channels of (I - R)^2 / (R^2 + 0.01)";
   j["efficiency_definition"] = "1 / (relmse * seconds), seconds = wall time of the sampling loop";
   j["tail_definition"] = "per-pixel relative squared error e = mean over channels of (I - R)^2 / (R^2 + 0.01); "
                          "max_rel_sq_error = the largest e; pixels_over_10x = the number of pixels with e > 100";
+  j["seeds_definition"] = "each strategy is rendered once per seed in `seeds`; relmse (= relmse_median), efficiency, "
+                          "max_rel_sq_error and pixels_over_10x are medians over the seeds, _min/_max/_worst their "
+                          "spread, _seeds the values per seed; images, relmse_stderr, mean, z, nan_count, seconds "
+                          "and convergence are the first seed's";
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
@@ -928,17 +995,24 @@ void run(const CompareArgs& a, const std::string& command_line) {
   std::ofstream(out / "index.html") << html;
 
   // 12. Summary.
-  std::printf("%-9s %8s %9s %11s %11s %9s\n", "strategy", "spp", "seconds", "relMSE", "efficiency", "vs mis");
+  if (nseeds > 1) std::printf("(relMSE, efficiency and the tail: medians over %d seeds)\n", nseeds);
+  std::printf("%-9s %8s %9s %11s %11s %9s %11s %8s\n", "strategy", "spp", "seconds", "relMSE", "efficiency", "vs mis",
+              "max rel.e", ">10x px");
   auto print_set = [&](const char* title, const std::vector<Measured>& ms) {
     std::printf("%s\n", title);
     const Measured* mis = nullptr;
     for (const auto& m : ms)
       if (m.strategy == Strategy::Mis) mis = &m;
     for (const auto& m : ms) {
-      const double eff = m.metrics.image.relmse > 0 && m.seconds > 0 ? 1 / (m.metrics.image.relmse * m.seconds) : 0;
-      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, m.metrics.image.relmse, eff);
-      if (mis && m.metrics.image.relmse > 0) std::printf(" %8.2fx", mis->metrics.image.relmse / m.metrics.image.relmse);
-      std::printf("\n");
+      const double rel = headline_relmse(m);
+      const double eff = rel > 0 && m.seconds > 0 ? 1 / (rel * m.seconds) : 0;
+      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, rel, eff);
+      if (mis && rel > 0)
+        std::printf(" %8.2fx", headline_relmse(*mis) / rel);
+      else
+        std::printf(" %9s", "-");
+      std::printf(" %11.4g %8g\n", median(over_seeds(m, [](const ImageMetrics& x) { return x.image.max_rel_sq_error; })),
+                  median(over_seeds(m, [](const ImageMetrics& x) { return x.image.pixels_over_10x; })));
     }
   };
   print_set("equal spp:", eq_spp);
@@ -970,6 +1044,11 @@ const RegisterCommand reg{{"compare",
                              sub.add_option("--width", a->width, "image width (0: from --height and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--height", a->height, "image height (0: from --width and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--seed", a->seed, "random seed of the measured renders")->type_name("INT")->capture_default_str();
+                             sub.add_option("--seeds", a->seeds,
+                                            "renders per strategy, seeds --seed, --seed + 1, ...: relMSE and the tail are "
+                                            "medians over them, 1..64")
+                                 ->type_name("K")
+                                 ->capture_default_str();
                              sub.add_option("--repeats", a->repeats, "timing repeats of each equal-spp render under 2 s (minimum kept)")
                                  ->type_name("INT")->capture_default_str();
                              a->common.add_sampling_options(sub);
