@@ -432,7 +432,7 @@ class Progress {
 
 json num(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
 /// A pixel count, or the median of an even number of counts (which may end in .5).
-json count(double x) { return x == std::floor(x) ? json(static_cast<std::uint64_t>(x)) : json(x); }
+json count_json(double x) { return x == std::floor(x) ? json(static_cast<std::uint64_t>(x)) : json(x); }
 
 /// Per object: relMSE, its standard error and the mean; `with_z` adds the bias z-score.
 json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, bool with_z) {
@@ -475,7 +475,7 @@ void put_seed_statistics(json& j, const Measured& m, std::size_t region) {
   put_over_seeds(j, "max_rel_sq_error", over_seeds(m, [&](const ImageMetrics& x) { return set(x).max_rel_sq_error; }),
                  num, false);
   put_over_seeds(j, "pixels_over_10x", over_seeds(m, [&](const ImageMetrics& x) { return set(x).pixels_over_10x; }),
-                 count, false);
+                 count_json, false);
 }
 
 json measured_json(const Measured& x, const std::vector<Region>& regions) {
@@ -735,7 +735,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
       const RenderResult r = do_render(m.strategy, m.spp, seed + k,
                                        what + ": " + to_string(m.strategy) + " seed " + std::to_string(seed + k));
       m.more_seeds.push_back(measure_image(r, ref, regions));
-      m.more_seeds.back().per_pixel = {};
+      m.more_seeds.back().per_pixel = std::vector<float>();  // only the first seed's error map is written
     }
     if (nseeds > 1)
       progress.line("%s: %-8s relMSE median %.4g over %d seeds", what.c_str(), to_string(m.strategy), headline_relmse(m), nseeds);

@@ -3,8 +3,8 @@
 // relative squared error e = mean over the three channels of (I - R)^2 / (R^2 + 0.01):
 //   relMSE            mean of e over the pixels, with its standard error from the spread of e,
 //   max_rel_sq_error  the largest e (the worst pixel: a firefly, or a blotch of bias),
-//   pixels_over_10x   how many pixels have e > 100, i.e. are "more than 10x off" (for a grey pixel with
-//                     R^2 >> 0.01: |I - R| > 10 R; where R is near 0: |I - R| > 1).
+//   pixels_over_10x   how many pixels have e > 100, i.e. are "more than 10x off" (for a grey pixel:
+//                     |I - R| > 10 sqrt(R^2 + 0.01), about 10 R for R well above 0.1).
 // relMSE alone hides a strategy whose error is a few huge pixels; the last two show that tail.
 #pragma once
 
