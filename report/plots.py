@@ -152,14 +152,20 @@ def region_bars(m, out, key, title):
     width = 0.8 / max(k, 1)
     fig, ax = plt.subplots(figsize=(max(6.4, 0.8 * len(regions) + 1.2), 4.2))
     xs = range(len(regions))
+    seeds = len(m.get("seeds") or [0])
     for i, st in enumerate(strategies):
-        vals = []
+        vals, lo, hi = [], [], []
         for reg in regions:
-            v = next((r.get("relmse") for r in st["regions"] if r["id"] == reg["id"]), None)
+            r = next((r for r in st["regions"] if r["id"] == reg["id"]), {})
+            v = r.get("relmse")
             vals.append(v if finite(v) else float("nan"))
+            # with --seeds K > 1: the bar is the median over the seeds, the error bar their [min, max]
+            lo.append(v - r["relmse_min"] if finite(v) and finite(r.get("relmse_min")) else 0)
+            hi.append(r["relmse_max"] - v if finite(v) and finite(r.get("relmse_max")) else 0)
         pos = [x - 0.4 + width * (i + 0.5) for x in xs]
         ax.bar(pos, vals, width=width * 0.95, color=color(st["strategy"]),
-               label=f'{st["strategy"]} ({st["spp"]} spp)')
+               label=f'{st["strategy"]} ({st["spp"]} spp)', yerr=[lo, hi] if seeds > 1 else None,
+               error_kw={"elinewidth": 0.8, "capsize": 1.5, "ecolor": "#333"})
     ax.set_yscale("log")
     style_log_axis(ax)
     ax.set_xticks(list(xs))
@@ -175,7 +181,8 @@ def region_bars(m, out, key, title):
     return {
         "file": "plots/" + name,
         "title": title,
-        "caption": "relMSE over each object's pixels, lower is better (log scale).",
+        "caption": "relMSE over each object's pixels, lower is better (log scale)."
+        + (f" Bars: the median over {seeds} seeds; error bars: their minimum and maximum." if seeds > 1 else ""),
     }
 
 

@@ -28,6 +28,19 @@
     return x.toPrecision(digits || 3);
   }
   function ratio(a, b) { return a > 0 && b > 0 ? a / b : NaN; }
+  function fmtCount(x) { return x === null || x === undefined ? "\u2013" : Number.isInteger(x) ? String(x) : x.toFixed(1); }
+  // With --seeds K > 1 relmse, efficiency and the tail are medians over K renders (metrics.json: seeds).
+  const K = (M.seeds || []).length || 1;
+  const seedsNote = K > 1 ? `relMSE, efficiency, the ratios and the tail are medians over ${K} seeds ` +
+    `(${M.seeds[0]}\u2013${M.seeds[K - 1]}); [min, max]: the spread of relMSE over the seeds, (worst \u2026): the worst ` +
+    `seed; the images, \u00b1 s.e., mean and timing are seed ${M.seed}'s. ` : "";
+  function spread(x) { return K > 1 && x.relmse_min !== undefined ? `[${fmt(x.relmse_min, 3)}, ${fmt(x.relmse_max, 3)}]` : ""; }
+  function withWorst(median, worst, f) { return K > 1 && worst !== undefined ? `${f(median)} (worst ${f(worst)})` : f(median); }
+  function tailCells(x) {
+    return [el("td", { text: withWorst(x.max_rel_sq_error, x.max_rel_sq_error_worst, (v) => fmt(v, 3)) }),
+      el("td", { class: x.pixels_over_10x_worst || x.pixels_over_10x ? "worse" : "",
+        text: withWorst(x.pixels_over_10x, x.pixels_over_10x_worst, fmtCount) })];
+  }
   function regionLabel(name) { return name.startsWith("conductor-") ? "GGX " + name.slice(10) : name; }
   const brokenImages = [];
   function showBroken() {
@@ -58,17 +71,21 @@
     if (note) sec.appendChild(el("p", { class: "note", text: note }));
     const byName = Object.fromEntries(block.strategies.map((s) => [s.strategy, s]));
     const mis = byName["mis"], prod = byName["product"];
-    const head = ["strategy", "spp", "seconds", "relMSE", "\u00b1 s.e.", "efficiency", "mis / this", "this / product", "mean", "NaN px"];
-    const t = el("table", {}, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
+    const head = ["strategy", "spp", "seconds", K > 1 ? "median relMSE" : "relMSE"]
+      .concat(K > 1 ? ["[min, max]"] : [])
+      .concat(["\u00b1 s.e.", "efficiency", "mis / this", "this / product", "max rel. sq. err.", "px > 10\u00d7 off", "mean", "NaN px"]);
+    const t = el("table", { class: "summary" }, [el("tr", {}, head.map((h) => el("th", { text: h })))]);
     const best = Math.min(...block.strategies.map((s) => s.relmse));
     for (const s of block.strategies) {
       t.appendChild(el("tr", {}, [
         el("td", { text: s.strategy }), el("td", { text: String(s.spp) }), el("td", { text: fmt(s.seconds, 3) }),
         el("td", { class: s.relmse === best ? "best" : "", text: fmt(s.relmse, 4) }),
-        el("td", { text: s.relmse_stderr ? (100 * s.relmse_stderr / s.relmse).toFixed(1) + "%" : "\u2013" }),
+        K > 1 ? el("td", { text: spread(s) }) : null,
+        el("td", { text: s.relmse_stderr ? (100 * s.relmse_stderr / (s.relmse_seeds ? s.relmse_seeds[0] : s.relmse)).toFixed(1) + "%" : "\u2013" }),
         el("td", { text: fmt(s.efficiency, 4) }),
         el("td", { text: mis ? fmt(ratio(mis.relmse, s.relmse), 3) : "\u2013" }),
         el("td", { text: prod ? fmt(ratio(s.relmse, prod.relmse), 3) : "\u2013" }),
+        ...tailCells(s),
         el("td", { text: fmt(s.mean, 4) }),
         el("td", { class: s.nan_count ? "worse" : "", text: String(s.nan_count) }),
       ]));
@@ -88,7 +105,10 @@
       const vals = block.strategies.map((s) => (s.regions.find((x) => x.id === r.id) || {}).relmse);
       const best = Math.min(...vals.filter((v) => v !== null && v !== undefined));
       const row = [el("td", { text: regionLabel(r.name) })];
-      vals.forEach((v) => row.push(el("td", { class: v === best ? "best" : "", text: fmt(v, 3) })));
+      block.strategies.forEach((s, i) => {
+        const x = s.regions.find((y) => y.id === r.id) || {};
+        row.push(el("td", { class: vals[i] === best ? "best" : "", text: fmt(vals[i], 3) + (K > 1 ? " " + spread(x) : "") }));
+      });
       if (prod) {
         const p = (prod.regions.find((x) => x.id === r.id) || {}).relmse;
         for (const s of others) {
@@ -96,6 +116,21 @@
           row.push(el("td", { class: q < 1 ? "worse" : "", text: fmt(q, 3) }));
         }
       }
+      t.appendChild(el("tr", {}, row));
+    }
+    sec.appendChild(t);
+    return sec;
+  }
+  function tailTable(block, title) {
+    const sec = el("section", {}, [el("h3", { text: title })]);
+    const head = [el("th", { text: "object", rowspan: "2" })].concat(
+      block.strategies.map((s) => el("th", { text: s.strategy, colspan: "2", style: "text-align:center" })));
+    const sub = [];
+    for (const s of block.strategies) sub.push(el("th", { text: "max rel. sq. err." }), el("th", { text: "px > 10\u00d7 off" }));
+    const t = el("table", { class: "tail" }, [el("tr", {}, head), el("tr", {}, sub)]);
+    for (const r of M.regions) {
+      const row = [el("td", { text: regionLabel(r.name) })];
+      for (const s of block.strategies) row.push(...tailCells(s.regions.find((x) => x.id === r.id) || {}));
       t.appendChild(el("tr", {}, row));
     }
     sec.appendChild(t);
@@ -123,7 +158,9 @@
   root.appendChild(summaryTable(M.equal_spp, `Equal samples: ${M.equal_spp.spp} spp`,
     "Seconds: wall time of the sampling loop, minimum over the timing repeats. \u00b1 s.e.: standard error of " +
     "relMSE from the spread of its per-pixel terms (rare fireflies that did not occur are not in it). Ratios above 1 in " +
-    "\u201cmis / this\u201d mean less error than mis."));
+    "\u201cmis / this\u201d mean less error than mis. The tail: max rel. sq. err. is the largest per-pixel relative " +
+    "squared error (mean over channels of (I \u2212 R)\u00b2 / (R\u00b2 + 0.01)); px > 10\u00d7 off counts the pixels where it " +
+    "exceeds 100. " + seedsNote));
   if (M.overhead) {
     root.appendChild(el("p", { html:
       `<b>Overhead</b> time(product) / time(mis) at ${M.overhead.spp} spp, ${M.overhead.threads} threads: ` +
@@ -151,8 +188,11 @@
 
   if (M.regions && M.regions.length) {
     const sec = el("section", {}, [el("h2", { text: M.scene === "fig1" ? "Per object (fig1: one sphere per roughness)" : "Per object" })]);
+    if (K > 1) sec.appendChild(el("p", { class: "note", text: `Medians over ${K} seeds, [min, max] their spread.` }));
     sec.appendChild(regionTable(M.equal_spp, "relMSE per object at equal spp"));
     if (M.equal_time) sec.appendChild(regionTable(M.equal_time, "relMSE per object at equal time"));
+    sec.appendChild(tailTable(M.equal_spp, "The tail per object at equal spp: the worst pixel and the pixels more than 10\u00d7 off"));
+    if (M.equal_time) sec.appendChild(tailTable(M.equal_time, "The tail per object at equal time"));
     root.appendChild(sec);
   }
   // ------------------------------------------------------------------ images with linked zoom
@@ -266,7 +306,9 @@
       if (W / H > 2.2) pair.classList.add("side");
       grid.appendChild(el("div", { class: "card" }, [
         el("div", { class: "cap" }, [el("b", { text: s.strategy }),
-          el("span", { text: `${s.spp} spp, ${fmt(s.seconds, 3)} s, relMSE ${fmt(s.relmse, 3)}; ${W / H > 2.2 ? "left" : "top"}: image, ${W / H > 2.2 ? "right" : "bottom"}: error map` })]),
+          el("span", { text: `${s.spp} spp, ${fmt(s.seconds, 3)} s, relMSE ` +
+            (K > 1 ? `${fmt(s.relmse_seeds[0], 3)} (seed ${M.seed}; median over ${K} seeds ${fmt(s.relmse, 3)})` : fmt(s.relmse, 3)) +
+            `; ${W / H > 2.2 ? "left" : "top"}: image, ${W / H > 2.2 ? "right" : "bottom"}: error map` })]),
         pair]));
     }
     sec.appendChild(grid);

@@ -1,8 +1,10 @@
 // `envpis compare`, run as a command: clean one-line errors for bad options, and a small comparison
-// whose metrics.json is checked against the images it wrote (relMSE recomputed from the EXR files with
-// OpenImageIO, per image and per object), the reference cache, and the report files.
+// whose metrics.json is checked against the images it wrote (relMSE and the tail recomputed from the EXR
+// files with OpenImageIO, per image and per object), the reference cache, and the report files. Also its
+// image metrics (apps/envpis/metrics.cpp) on a hand-built image.
 #include <gtest/gtest.h>
 #include "cli_util.h"
+#include "metrics.h"
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -43,6 +45,64 @@ std::vector<float> read_rgb(const fs::path& path, int* w, int* h, int channels =
   return px;
 }
 
+// Five pixels with known errors against a grey reference of 1 (pixel 3: black): exact, 9x off, 11x off,
+// 0.5 over black, and one channel 21x off. Only pixels 2 and 4 are more than 10x off (e > 100).
+TEST(CompareMetrics, TailOfAHandBuiltImage) {
+  using namespace envpis::app;
+  const std::vector<float> ref{1, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1};
+  const std::vector<float> img{1, 1, 1, 10, 10, 10, 12, 12, 12, 0.5f, 0.5f, 0.5f, 1, 1, 22};
+  const std::vector<float> var(5, 0.0f);
+  const std::vector<int> ids{0, 0, 1, -1, 1};
+  const ImageMetrics m = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {0, 1});
+  const double e[5] = {0, 81 / 1.01, 121 / 1.01, 0.25 / 0.01, 441 / 1.01 / 3};
+  auto near = [](double want) { return 1e-12 * want; };
+  ASSERT_EQ(m.per_pixel.size(), 5u);
+  for (int p = 0; p < 5; ++p) EXPECT_NEAR(m.per_pixel[p], e[p], 1e-6 * e[p]) << p;
+  EXPECT_EQ(m.image.pixels, 5u);
+  EXPECT_NEAR(m.image.relmse, (e[1] + e[2] + e[3] + e[4]) / 5, near(e[4]));
+  EXPECT_NEAR(m.image.max_rel_sq_error, e[4], near(e[4]));
+  EXPECT_EQ(m.image.pixels_over_10x, 2u);
+  ASSERT_EQ(m.regions.size(), 2u);
+  EXPECT_NEAR(m.regions[0].relmse, e[1] / 2, near(e[1]));
+  EXPECT_NEAR(m.regions[0].max_rel_sq_error, e[1], near(e[1]));
+  EXPECT_EQ(m.regions[0].pixels_over_10x, 0u) << "9x off is not more than 10x off";
+  EXPECT_NEAR(m.regions[1].relmse, (e[2] + e[4]) / 2, near(e[4]));
+  EXPECT_NEAR(m.regions[1].max_rel_sq_error, e[4], near(e[4]));
+  EXPECT_EQ(m.regions[1].pixels_over_10x, 2u);
+  // An object with no pixel: NaN metrics, no pixel over.
+  const ImageMetrics none = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {7});
+  EXPECT_TRUE(std::isnan(none.regions[0].relmse));
+  EXPECT_TRUE(std::isnan(none.regions[0].max_rel_sq_error));
+  EXPECT_EQ(none.regions[0].pixels_over_10x, 0u);
+}
+
+TEST(CompareMetrics, Median) {
+  using envpis::app::median;
+  EXPECT_EQ(median({3, 1, 2}), 2);
+  EXPECT_EQ(median({4, 1, 3, 2}), 2.5);
+  EXPECT_EQ(median({5}), 5);
+  EXPECT_TRUE(std::isnan(median({})));
+}
+
+// Each pixel's relative squared error, recomputed here from the written images (the command's own
+// computation is in apps/envpis/metrics.cpp).
+std::vector<double> rel_sq_errors(const std::vector<float>& img, const std::vector<float>& ref) {
+  std::vector<double> e(ref.size() / 3, 0.0);
+  for (std::size_t p = 0; p < e.size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const double I = img[p * 3 + c], R = ref[p * 3 + c];
+      e[p] += (I - R) * (I - R) / (R * R + 0.01);
+    }
+    e[p] /= 3;
+  }
+  return e;
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
+}
+
 class CompareCommand : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -66,6 +126,11 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --oracle-dirs 3" + o, "square"},
       {"compare --width -5" + o, "--width"},
       {"compare --seed 1 --ref-seed 1" + o, "--ref-seed"},
+      {"compare --seeds 0" + o, "--seeds: must be in 1..64, got '0'"},
+      {"compare --seeds abc" + o, "--seeds: expected an integer in 1..64, got 'abc'"},
+      {"compare --seeds 65" + o, "--seeds: must be in 1..64, got '65'"},
+      {"compare --seeds 2.5" + o, "--seeds: expected an integer in 1..64, got '2.5'"},
+      {"compare --seed 2 --seeds 3 --ref-seed 4" + o, "--ref-seed 4 is one of the measured seeds 2..4 (--seed, --seeds)"},
       {"compare --env /nonexistent/map.exr" + o, "cannot load environment map '/nonexistent/map.exr': no such file"},
       {"compare --scene nosuchscene" + o, "unknown scene"},
       {"compare", "--out is required"},
@@ -125,35 +190,42 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
     ASSERT_TRUE(m[block].is_object()) << block;
     ASSERT_EQ(m[block]["strategies"].size(), 3u) << block;
     for (const auto& s : m[block]["strategies"]) {
-      for (const char* k : {"spp", "seconds", "relmse", "efficiency", "mean", "nan_count", "regions"})
+      for (const char* k : {"spp", "seconds", "relmse", "efficiency", "mean", "nan_count", "regions", "max_rel_sq_error",
+                            "pixels_over_10x"})
         EXPECT_TRUE(s.contains(k)) << block << " " << s["strategy"] << " lacks " << k;
       int w = 0, h = 0;
       const std::vector<float> img = read_rgb(out / s["images"]["exr"].get<std::string>(), &w, &h);
       ASSERT_EQ(img.size(), ref.size());
-      double total = 0;
-      std::vector<double> region_sum(8, 0), region_n(8, 0);
+      double total = 0, max_e = 0;
+      int over = 0;
+      std::vector<double> region_sum(8, 0), region_n(8, 0), region_max(8, 0), region_over(8, 0);
+      const std::vector<double> errors = rel_sq_errors(img, ref);
       for (std::size_t p = 0; p < ids.size(); ++p) {
-        double e = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double I = img[p * 3 + c], R = ref[p * 3 + c];
-          e += (I - R) * (I - R) / (R * R + 0.01);
-        }
-        total += e / 3;
+        const double e = errors[p];
+        total += e;
+        max_e = std::max(max_e, e);
+        over += e > 100;
         const int id = static_cast<int>(ids[p]);
         if (id >= 0 && id < 8) {
-          region_sum[id] += e / 3;
+          region_sum[id] += e;
           region_n[id] += 1;
+          region_max[id] = std::max(region_max[id], e);
+          region_over[id] += e > 100;
         }
       }
       const double relmse = total / double(ids.size());
       EXPECT_NEAR(s["relmse"].get<double>(), relmse, 1e-6 * relmse + 1e-12) << block << " " << s["strategy"];
       EXPECT_NEAR(s["efficiency"].get<double>(), 1.0 / (relmse * s["seconds"].get<double>()),
                   1e-4 * s["efficiency"].get<double>());
+      EXPECT_NEAR(s["max_rel_sq_error"].get<double>(), max_e, 1e-6 * max_e) << block << " " << s["strategy"];
+      EXPECT_EQ(s["pixels_over_10x"].get<int>(), over) << block << " " << s["strategy"];
       for (const auto& reg : s["regions"]) {
         const int id = reg["id"];
         ASSERT_GT(region_n[id], 0);
         const double want = region_sum[id] / region_n[id];
         EXPECT_NEAR(reg["relmse"].get<double>(), want, 1e-6 * want + 1e-12) << s["strategy"] << " region " << id;
+        EXPECT_NEAR(reg["max_rel_sq_error"].get<double>(), region_max[id], 1e-6 * region_max[id]) << s["strategy"] << " region " << id;
+        EXPECT_EQ(reg["pixels_over_10x"].get<double>(), region_over[id]) << s["strategy"] << " region " << id;
       }
       for (const char* k : {"png", "error_png"}) EXPECT_TRUE(fs::exists(out / s["images"][k].get<std::string>()));
     }
@@ -187,6 +259,85 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_EQ(m2["equal_spp"]["strategies"][0]["relmse"], m["equal_spp"]["strategies"][0]["relmse"]);
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
+}
+
+// --seeds 3: three independent renders per strategy (seeds 2, 3, 4; the reference's seed 5 is next to
+// them), each seed's relMSE and tail listed, the headline numbers their medians. Each seed's numbers
+// are those of a one-seed run with that seed; the first seed's are those of the images written.
+TEST_F(CompareCommand, SeedsReportMediansOverIndependentRenders) {
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-seeds-" + pid);
+  const fs::path out1 = fs::temp_directory_path() / ("envpis-test-compare-seed3-" + pid);
+  const fs::path cache = fs::temp_directory_path() / ("envpis-test-compare-seeds-cache-" + pid);
+  std::error_code ec;
+  for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
+  // env at 2 spp: the sun's reflections give pixels more than 10x off.
+  const std::string common = "compare --scene fig1 --width 64 --height 12 --spp 2 --ref-spp 64 --strategies env,mis "
+                             "--ref-seed 5 --equal-time auto --repeats 1 --no-convergence --no-plots --quiet "
+                             "--cache-dir '" + cache.string() + "'";
+  const CmdResult r = run(common + " --seed 2 --seeds 3 --out '" + out.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const CmdResult r1 = run(common + " --seed 3 --out '" + out1.string() + "'");
+  ASSERT_EQ(r1.code, 0) << r1.output;
+  json m, m1;
+  std::ifstream(out / "metrics.json") >> m;
+  std::ifstream(out1 / "metrics.json") >> m1;
+  EXPECT_EQ(m["seed"], 2);
+  EXPECT_EQ(m["seeds"], json({2, 3, 4}));
+  EXPECT_EQ(m1["seeds"], json({3}));
+  EXPECT_EQ(m["reference"]["seed"], 5);
+
+  int W = 0, H = 0;
+  const std::vector<float> ref = read_rgb(out / "images" / "reference.exr", &W, &H);
+  ASSERT_EQ(ref.size(), 64u * 12u * 3u);
+  double tail_pixels = 0;
+  for (const char* block : {"equal_spp", "equal_time"}) {
+    ASSERT_TRUE(m[block].is_object()) << block;
+    for (std::size_t i = 0; i < m[block]["strategies"].size(); ++i) {
+      const json& s = m[block]["strategies"][i];
+      const std::string what = std::string(block) + " " + s["strategy"].get<std::string>();
+      std::vector<json> sets{s};
+      for (const json& reg : s["regions"]) sets.push_back(reg);
+      for (const json& x : sets) {
+        for (const char* k : {"relmse", "max_rel_sq_error", "pixels_over_10x"}) {
+          const std::vector<double> v = x[std::string(k) + "_seeds"].get<std::vector<double>>();
+          ASSERT_EQ(v.size(), 3u) << what << " " << k;
+          EXPECT_EQ(x[k].get<double>(), median_of(v)) << what << " " << k;
+          EXPECT_EQ(x[std::string(k) + (k == std::string("relmse") ? "_max" : "_worst")].get<double>(),
+                    *std::max_element(v.begin(), v.end())) << what << " " << k;
+        }
+        const std::vector<double> rel = x["relmse_seeds"].get<std::vector<double>>();
+        EXPECT_EQ(x["relmse_median"], x["relmse"]) << what;
+        EXPECT_EQ(x["relmse_min"].get<double>(), *std::min_element(rel.begin(), rel.end())) << what;
+        EXPECT_TRUE(rel[0] != rel[1] && rel[1] != rel[2] && rel[0] != rel[2]) << what << ": the seeds are not independent";
+      }
+      const double relmse = s["relmse"].get<double>();
+      EXPECT_NEAR(s["efficiency"].get<double>(), 1.0 / (relmse * s["seconds"].get<double>()), 1e-9 * s["efficiency"].get<double>())
+          << what << ": efficiency from the median relMSE";
+      // The first seed's numbers are those of the images written.
+      int w = 0, h = 0;
+      const std::vector<double> e = rel_sq_errors(read_rgb(out / s["images"]["exr"].get<std::string>(), &w, &h), ref);
+      double total = 0, max_e = 0, over = 0;
+      for (double x : e) {
+        total += x;
+        max_e = std::max(max_e, x);
+        over += x > 100;
+      }
+      EXPECT_NEAR(s["relmse_seeds"][0].get<double>(), total / double(e.size()), 1e-6 * total / double(e.size())) << what;
+      EXPECT_NEAR(s["max_rel_sq_error_seeds"][0].get<double>(), max_e, 1e-6 * max_e) << what;
+      EXPECT_EQ(s["pixels_over_10x_seeds"][0].get<double>(), over) << what;
+      tail_pixels += s["pixels_over_10x_worst"].get<double>();
+      // The second seed is seed 3: the same numbers as the one-seed run with --seed 3 (same spp, same reference).
+      const json& s1 = m1[block]["strategies"][i];
+      if (s1["spp"] == s["spp"]) {
+        EXPECT_EQ(s["relmse_seeds"][1], s1["relmse"]) << what;
+        EXPECT_EQ(s["max_rel_sq_error_seeds"][1], s1["max_rel_sq_error"]) << what;
+        EXPECT_EQ(s["pixels_over_10x_seeds"][1], s1["pixels_over_10x"]) << what;
+      }
+    }
+  }
+  EXPECT_GT(tail_pixels, 0) << "env at 2 spp should have pixels more than 10x off: the test does not exercise the count";
+  for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
 }
 
 }  // namespace

@@ -19,6 +19,9 @@
 //   minimum over --repeats renders (the images are deterministic; only the timing is repeated).
 //   Convergence: relMSE at spp 1, 2, 4, ... and --spp, each rendered with the same seed (the renderer's
 //   samples are keyed on (seed, pixel, sample), so the series is the prefix of the equal-spp render).
+//   Seeds: with --seeds K every strategy is rendered K times at equal spp (and at equal time), with seeds
+//   --seed ... --seed + K - 1; relMSE, efficiency and the tail (metrics.h) are the medians over the K,
+//   reported with their spread. The images, timings and the convergence series are the first seed's.
 #ifdef ENVPIS_HAVE_RENDER
 
 #include <OpenImageIO/imageio.h>
@@ -51,6 +54,7 @@
 #include <vector>
 
 #include "command.h"
+#include "metrics.h"
 #include "options.h"
 #include "envpis/envpis.h"
 #include "render/render.h"
@@ -65,8 +69,8 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using namespace envpis::render;
 
-constexpr double kRelEpsilon = 0.01;         // relMSE denominator R^2 + 0.01 (DESIGN.md 5)
 constexpr std::uint64_t kRefSeedOffset = 1000003;
+constexpr int kMaxSeeds = 64;
 constexpr double kErrLog10Min = -5.0, kErrLog10Max = 1.0;  // false-colour range of the error maps
 
 struct CompareArgs {
@@ -79,6 +83,7 @@ struct CompareArgs {
   std::string equal_time;
   std::string width = "0", height = "0";  // 0: half the scene camera's size
   std::string seed = "0";
+  std::string seeds = "1";
   std::string repeats = "3";
   std::string cache_dir;
   std::string report_dir;
@@ -124,17 +129,6 @@ struct Region {
   double cx = 0, cy = 0;               // centroid (pixel centres)
 };
 
-struct ImageMetrics {
-  double relmse = 0;
-  double relmse_stderr = 0;  // standard error of relmse from the spread of the per-pixel terms
-  double mean = 0;
-  std::vector<double> region_relmse;  // indexed like the region list
-  std::vector<double> region_stderr;
-  std::vector<double> region_mean;
-  std::vector<double> region_z;       // (mean - ref mean) / sqrt(var + ref var), NaN when undefined
-  std::vector<float> per_pixel;       // mean over channels of the relMSE term
-};
-
 struct Reference {
   int width = 0, height = 0, spp = 0;
   std::vector<float> rgb, variance;
@@ -145,77 +139,10 @@ struct Reference {
   bool cached = false;
 };
 
-ImageMetrics measure(const std::vector<float>& rgb, const std::vector<float>& variance, const Reference& ref,
-                     const std::vector<Region>& regions) {
-  ImageMetrics m;
-  const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
-  m.per_pixel.assign(npix, 0.0f);
-  const std::size_t nr = regions.size();
-  std::vector<double> rsum(nr, 0), rsum2(nr, 0), rmean(nr, 0), rvar(nr, 0), refmean(nr, 0), refvar(nr, 0);
-  std::vector<std::size_t> rcount(nr, 0);
-  std::map<int, std::size_t> region_index;
-  for (std::size_t i = 0; i < nr; ++i) region_index[regions[i].id] = i;
-  double total = 0, total2 = 0, sum = 0;
-  for (std::size_t p = 0; p < npix; ++p) {
-    double e = 0, avg = 0, ravg = 0;
-    for (int c = 0; c < 3; ++c) {
-      const double I = rgb[p * 3 + c], R = ref.rgb[p * 3 + c];
-      e += (I - R) * (I - R) / (R * R + kRelEpsilon);
-      avg += I;
-      ravg += R;
-    }
-    e /= 3;
-    m.per_pixel[p] = static_cast<float>(e);
-    total += e;
-    total2 += e * e;
-    sum += avg / 3;
-    auto it = region_index.find(ref.object_id[p]);
-    if (it != region_index.end()) {
-      const std::size_t r = it->second;
-      rsum[r] += e;
-      rsum2[r] += e * e;
-      rcount[r] += 1;
-      rmean[r] += avg / 3;
-      rvar[r] += variance[p];
-      refmean[r] += ravg / 3;
-      refvar[r] += ref.variance[p];
-    }
-  }
-  // Standard error of a mean of n independent per-pixel terms: sqrt(sample variance / n).
-  auto stderr_of = [](double s1, double s2, double n) {
-    return n > 1 ? std::sqrt(std::max(0.0, (s2 - s1 * s1 / n) / (n - 1)) / n) : std::nan("");
-  };
-  m.relmse = total / double(npix);
-  m.relmse_stderr = stderr_of(total, total2, double(npix));
-  m.mean = sum / double(npix);
-  for (std::size_t r = 0; r < nr; ++r) {
-    const double n = double(rcount[r]);
-    if (n == 0) {
-      m.region_relmse.push_back(std::nan(""));
-      m.region_stderr.push_back(std::nan(""));
-      m.region_mean.push_back(std::nan(""));
-      m.region_z.push_back(std::nan(""));
-      continue;
-    }
-    m.region_relmse.push_back(rsum[r] / n);
-    m.region_stderr.push_back(stderr_of(rsum[r], rsum2[r], n));
-    m.region_mean.push_back(rmean[r] / n);
-    const double var = (rvar[r] + refvar[r]) / (n * n);
-    m.region_z.push_back(var > 0 ? (rmean[r] - refmean[r]) / n / std::sqrt(var) : std::nan(""));
-  }
-  return m;
-}
-
-/// relMSE the reference's own noise adds to every measurement: mean over pixels of var(R)/(R^2+0.01),
-/// with var the per-pixel variance of the mean of the channels (the renderer's variance AOV).
-double reference_floor(const Reference& ref) {
-  const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
-  double total = 0;
-  for (std::size_t p = 0; p < npix; ++p) {
-    const double R = (double(ref.rgb[p * 3]) + ref.rgb[p * 3 + 1] + ref.rgb[p * 3 + 2]) / 3;
-    total += ref.variance[p] / (R * R + kRelEpsilon);
-  }
-  return total / double(npix);
+ImageMetrics measure_image(const RenderResult& r, const Reference& ref, const std::vector<Region>& regions) {
+  std::vector<int> ids;
+  for (const Region& g : regions) ids.push_back(g.id);
+  return measure(NoisyImage{r.rgb, r.variance}, NoisyImage{ref.rgb, ref.variance}, ref.object_id, ids);
 }
 
 void write_png(const std::string& path, int w, int h, const std::vector<unsigned char>& rgb8) {
@@ -465,9 +392,23 @@ struct Measured {
   double cpu_seconds = 0;  // process CPU seconds (all threads), minimum over the runs
   std::vector<double> seconds_runs;
   std::size_t nan_count = 0;
-  ImageMetrics metrics;
+  ImageMetrics metrics;                  // of the first seed, whose image is written and shown
+  std::vector<ImageMetrics> more_seeds;  // of seeds --seed + 1, ... (--seeds > 1), without per_pixel
   std::string stem;  // images/<stem>.{exr,png}, images/<stem>-error.png
 };
+
+/// One number of each seed's metrics, in seed order.
+template <class F>
+std::vector<double> over_seeds(const Measured& m, F f) {
+  std::vector<double> v{double(f(m.metrics))};
+  for (const ImageMetrics& x : m.more_seeds) v.push_back(double(f(x)));
+  return v;
+}
+
+/// The relMSE that compares strategies (and gives the efficiency): the median over the seeds.
+double headline_relmse(const Measured& m) {
+  return median(over_seeds(m, [](const ImageMetrics& x) { return x.image.relmse; }));
+}
 
 class Progress {
  public:
@@ -489,19 +430,52 @@ class Progress {
   std::chrono::steady_clock::time_point t0_;
 };
 
+json num(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+/// A pixel count, or the median of an even number of counts (which may end in .5).
+json count_json(double x) { return x == std::floor(x) ? json(static_cast<std::uint64_t>(x)) : json(x); }
+
+/// Per object: relMSE, its standard error and the mean; `with_z` adds the bias z-score.
 json regions_json(const std::vector<Region>& regions, const ImageMetrics& m, bool with_z) {
   json arr = json::array();
   for (std::size_t i = 0; i < regions.size(); ++i) {
-    json r;
-    r["id"] = regions[i].id;
-    r["name"] = regions[i].name;
-    r["relmse"] = std::isfinite(m.region_relmse[i]) ? json(m.region_relmse[i]) : json(nullptr);
-    r["relmse_stderr"] = std::isfinite(m.region_stderr[i]) ? json(m.region_stderr[i]) : json(nullptr);
-    r["mean"] = std::isfinite(m.region_mean[i]) ? json(m.region_mean[i]) : json(nullptr);
-    if (with_z) r["z"] = std::isfinite(m.region_z[i]) ? json(m.region_z[i]) : json(nullptr);
+    const PixelSetMetrics& g = m.regions[i];
+    json r = {{"id", regions[i].id},
+              {"name", regions[i].name},
+              {"relmse", num(g.relmse)},
+              {"relmse_stderr", num(g.relmse_stderr)},
+              {"mean", num(g.mean)}};
+    if (with_z) r["z"] = num(g.z);
     arr.push_back(r);
   }
   return arr;
+}
+
+/// Writes NAME = the median of `v` (one value per seed), NAME_seeds = `v`, and the spread: NAME_min and
+/// NAME_max, or for a tail metric only NAME_worst (the largest).
+void put_over_seeds(json& j, const std::string& name, const std::vector<double>& v, json (*as)(double), bool spread) {
+  j[name] = as(median(v));
+  json list = json::array();
+  for (double x : v) list.push_back(as(x));
+  j[name + "_seeds"] = list;
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  if (spread) j[name + "_min"] = as(*lo);
+  j[name + (spread ? "_max" : "_worst")] = as(*hi);
+}
+
+/// relMSE and the tail of one set of pixels (`region` of the regions, or the image for `npos`) over the
+/// seeds: relmse (= relmse_median), relmse_seeds, relmse_min, relmse_max, max_rel_sq_error(_seeds,
+/// _worst), pixels_over_10x(_seeds, _worst).
+void put_seed_statistics(json& j, const Measured& m, std::size_t region) {
+  auto set = [region](const ImageMetrics& x) -> const PixelSetMetrics& {
+    return region == std::string::npos ? x.image : x.regions[region];
+  };
+  const std::vector<double> relmse = over_seeds(m, [&](const ImageMetrics& x) { return set(x).relmse; });
+  put_over_seeds(j, "relmse", relmse, num, true);
+  j["relmse_median"] = j["relmse"];
+  put_over_seeds(j, "max_rel_sq_error", over_seeds(m, [&](const ImageMetrics& x) { return set(x).max_rel_sq_error; }),
+                 num, false);
+  put_over_seeds(j, "pixels_over_10x", over_seeds(m, [&](const ImageMetrics& x) { return set(x).pixels_over_10x; }),
+                 count_json, false);
 }
 
 json measured_json(const Measured& x, const std::vector<Region>& regions) {
@@ -511,12 +485,14 @@ json measured_json(const Measured& x, const std::vector<Region>& regions) {
   j["seconds"] = x.seconds;
   j["seconds_runs"] = x.seconds_runs;
   j["cpu_seconds"] = x.cpu_seconds;
-  j["relmse"] = x.metrics.relmse;
-  j["relmse_stderr"] = x.metrics.relmse_stderr;
-  j["efficiency"] = x.metrics.relmse > 0 && x.seconds > 0 ? json(1.0 / (x.metrics.relmse * x.seconds)) : json(nullptr);
-  j["mean"] = x.metrics.mean;
+  put_seed_statistics(j, x, std::string::npos);
+  j["relmse_stderr"] = num(x.metrics.image.relmse_stderr);
+  const double relmse = headline_relmse(x);
+  j["efficiency"] = relmse > 0 && x.seconds > 0 ? json(1.0 / (relmse * x.seconds)) : json(nullptr);
+  j["mean"] = x.metrics.image.mean;
   j["nan_count"] = x.nan_count;
   j["regions"] = regions_json(regions, x.metrics, true);
+  for (std::size_t i = 0; i < regions.size(); ++i) put_seed_statistics(j["regions"][i], x, i);
   j["images"] = {{"exr", "images/" + x.stem + ".exr"},
                  {"png", "images/" + x.stem + ".png"},
                  {"error_png", "images/" + x.stem + "-error.png"}};
@@ -542,9 +518,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
     }
   }();
   const std::uint64_t seed = static_cast<std::uint64_t>(parse_integer("--seed", a.seed, 0, INT64_MAX / 2));
+  const int nseeds = static_cast<int>(parse_integer("--seeds", a.seeds, 1, kMaxSeeds));
   const std::uint64_t ref_seed =
       a.ref_seed.empty() ? seed + kRefSeedOffset : static_cast<std::uint64_t>(parse_integer("--ref-seed", a.ref_seed, 0, INT64_MAX));
-  if (ref_seed == seed) throw Error("--ref-seed must differ from --seed (the reference's noise must be independent)");
+  if (ref_seed >= seed && ref_seed - seed < static_cast<std::uint64_t>(nseeds))
+    throw Error("--ref-seed " + std::to_string(ref_seed) + " is one of the measured seeds " + std::to_string(seed) + ".." +
+                std::to_string(seed + nseeds - 1) + " (--seed, --seeds): the reference's noise must be independent");
   const int repeats = static_cast<int>(parse_integer("--repeats", a.repeats, 1, 100));
   std::optional<double> equal_time;
   bool equal_time_auto = false;
@@ -752,7 +731,19 @@ void run(const CompareArgs& a, const std::string& command_line) {
     for (const Measured& m : eq_spp)
       progress.line("equal spp: %-8s %.3f s (min of %zu runs)", to_string(m.strategy), m.seconds, m.seconds_runs.size());
   for (std::size_t i = 0; i < eq_spp.size(); ++i)
-    eq_spp[i].metrics = measure(eq_images[i].rgb, eq_images[i].variance, ref, regions);
+    eq_spp[i].metrics = measure_image(eq_images[i], ref, regions);
+  // Seeds --seed + 1, ...: their metrics only (the images and the timing are the first seed's).
+  auto measure_more_seeds = [&](Measured& m, const std::string& what) {
+    for (int k = 1; k < nseeds; ++k) {
+      const RenderResult r = do_render(m.strategy, m.spp, seed + k,
+                                       what + ": " + to_string(m.strategy) + " seed " + std::to_string(seed + k));
+      m.more_seeds.push_back(measure_image(r, ref, regions));
+      m.more_seeds.back().per_pixel = std::vector<float>();  // only the first seed's error map is written
+    }
+    if (nseeds > 1)
+      progress.line("%s: %-8s relMSE median %.4g over %d seeds", what.c_str(), to_string(m.strategy), headline_relmse(m), nseeds);
+  };
+  for (Measured& m : eq_spp) measure_more_seeds(m, "equal spp");
 
   // 6. Overhead of product over mis at equal spp (same run, same threads).
   auto find_eq = [&](Strategy s) -> const Measured* {
@@ -784,12 +775,12 @@ void run(const CompareArgs& a, const std::string& command_line) {
       json series = json::array();
       for (int n : points) {
         RenderResult r = do_render(s, n, seed, std::string("convergence: ") + to_string(s) + " @ " + std::to_string(n));
-        const ImageMetrics mm = measure(r.rgb, r.variance, ref, regions);
-        series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.relmse}, {"regions", regions_json(regions, mm, false)}});
+        const ImageMetrics mm = measure_image(r, ref, regions);
+        series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.image.relmse}, {"regions", regions_json(regions, mm, false)}});
       }
       series.push_back({{"spp", spp},
                         {"seconds", eq_spp[i].seconds},
-                        {"relmse", eq_spp[i].metrics.relmse},
+                        {"relmse", eq_spp[i].metrics.image.relmse},
                         {"regions", regions_json(regions, eq_spp[i].metrics, false)}});
       convergence[to_string(s)] = series;
       progress.line("convergence: %-8s %zu points", to_string(s), points.size() + 1);
@@ -819,8 +810,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
       m.seconds = r.seconds;
       m.cpu_seconds = r.cpu_seconds;
       m.nan_count = r.nonfinite_pixels;
-      m.metrics = measure(r.rgb, r.variance, ref, regions);
+      m.metrics = measure_image(r, ref, regions);
       progress.line("equal time: %-8s %d spp  %.3f s (budget %.3f s)", to_string(e.strategy), n, r.seconds, budget);
+      measure_more_seeds(m, "equal time");
       time_images.push_back(std::move(r));
       eq_time.push_back(std::move(m));
     }
@@ -872,10 +864,18 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["width"] = W;
   j["height"] = H;
   j["seed"] = seed;
+  j["seeds"] = json::array();
+  for (int k = 0; k < nseeds; ++k) j["seeds"].push_back(seed + k);
   j["threads"] = threads_used;
   j["hardware_threads"] = std::thread::hardware_concurrency();
   j["relmse_definition"] = "mean over pixels and channels of (I - R)^2 / (R^2 + 0.01)";
   j["efficiency_definition"] = "1 / (relmse * seconds), seconds = wall time of the sampling loop";
+  j["tail_definition"] = "per-pixel relative squared error e = mean over channels of (I - R)^2 / (R^2 + 0.01); "
+                         "max_rel_sq_error = the largest e; pixels_over_10x = the number of pixels with e > 100";
+  j["seeds_definition"] = "each strategy is rendered once per seed in `seeds`; relmse (= relmse_median), efficiency, "
+                          "max_rel_sq_error and pixels_over_10x are medians over the seeds, _min/_max/_worst their "
+                          "spread, _seeds the values per seed; images, relmse_stderr, mean, z, nan_count, seconds "
+                          "and convergence are the first seed's";
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
@@ -897,7 +897,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
                     {"seconds", ref.seconds},
                     {"cached", ref.cached},
                     {"cache_dir", cache_dir},
-                    {"relmse_floor", reference_floor(ref)},
+                    {"relmse_floor", reference_floor(NoisyImage{ref.rgb, ref.variance})},
                     {"exr", "images/reference.exr"},
                     {"png", "images/reference.png"},
                     {"object_id_exr", "images/object-id.exr"}};
@@ -1000,17 +1000,24 @@ void run(const CompareArgs& a, const std::string& command_line) {
   std::ofstream(out / "index.html") << html;
 
   // 12. Summary.
-  std::printf("%-9s %8s %9s %11s %11s %9s\n", "strategy", "spp", "seconds", "relMSE", "efficiency", "vs mis");
+  if (nseeds > 1) std::printf("(relMSE, efficiency and the tail: medians over %d seeds)\n", nseeds);
+  std::printf("%-9s %8s %9s %11s %11s %9s %11s %8s\n", "strategy", "spp", "seconds", "relMSE", "efficiency", "vs mis",
+              "max rel.e", ">10x px");
   auto print_set = [&](const char* title, const std::vector<Measured>& ms) {
     std::printf("%s\n", title);
     const Measured* mis = nullptr;
     for (const auto& m : ms)
       if (m.strategy == Strategy::Mis) mis = &m;
     for (const auto& m : ms) {
-      const double eff = m.metrics.relmse > 0 && m.seconds > 0 ? 1 / (m.metrics.relmse * m.seconds) : 0;
-      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, m.metrics.relmse, eff);
-      if (mis && m.metrics.relmse > 0) std::printf(" %8.2fx", mis->metrics.relmse / m.metrics.relmse);
-      std::printf("\n");
+      const double rel = headline_relmse(m);
+      const double eff = rel > 0 && m.seconds > 0 ? 1 / (rel * m.seconds) : 0;
+      std::printf("%-9s %8d %9.3f %11.4g %11.4g", to_string(m.strategy), m.spp, m.seconds, rel, eff);
+      if (mis && rel > 0)
+        std::printf(" %8.2fx", headline_relmse(*mis) / rel);
+      else
+        std::printf(" %9s", "-");
+      std::printf(" %11.4g %8g\n", median(over_seeds(m, [](const ImageMetrics& x) { return x.image.max_rel_sq_error; })),
+                  median(over_seeds(m, [](const ImageMetrics& x) { return x.image.pixels_over_10x; })));
     }
   };
   print_set("equal spp:", eq_spp);
@@ -1042,6 +1049,11 @@ const RegisterCommand reg{{"compare",
                              sub.add_option("--width", a->width, "image width (0: from --height and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--height", a->height, "image height (0: from --width and the scene's aspect, or half the scene's)")->type_name("INT")->capture_default_str();
                              sub.add_option("--seed", a->seed, "random seed of the measured renders")->type_name("INT")->capture_default_str();
+                             sub.add_option("--seeds", a->seeds,
+                                            "renders per strategy, seeds --seed, --seed + 1, ...: relMSE and the tail are "
+                                            "medians over them, 1..64")
+                                 ->type_name("K")
+                                 ->capture_default_str();
                              sub.add_option("--repeats", a->repeats, "timing repeats of each equal-spp render under 2 s (minimum kept)")
                                  ->type_name("INT")->capture_default_str();
                              a->common.add_sampling_options(sub);

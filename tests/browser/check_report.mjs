@@ -7,6 +7,9 @@
 //   - every strategy of metrics.json has its image, and every plot is shown,
 //   - the linked zoom works: hovering over one image moves the marker in all of them and updates the
 //     insets.
+//   - the summary tables show the tail (max rel. sq. err., pixels > 10x off) next to relMSE, with the
+//     median over seeds and its [min, max] spread when metrics.json has several seeds, and the per-object
+//     tail tables have a row per object.
 //
 //   node tests/browser/check_report.mjs DIR [--screenshot FILE] [--allow-no-plots]
 //
@@ -108,6 +111,30 @@ try {
   const text = await page.evaluate(() => document.body.innerText);
   for (const s of metrics.equal_spp.strategies) if (!text.includes(s.strategy)) fail(`strategy ${s.strategy} not shown`);
   if (metrics.overhead && !text.includes("Overhead")) fail("overhead ratio not shown");
+
+  // The summary tables show the tail next to relMSE, and with several seeds the median and its spread;
+  // one row per strategy, a number in every tail cell.
+  const nseeds = (metrics.seeds || []).length || 1;
+  const tables = await page.evaluate(() => Array.from(document.querySelectorAll("table.summary")).map((t) =>
+    Array.from(t.querySelectorAll("tr")).map((r) => Array.from(r.children).map((c) => c.textContent))));
+  const blocks = ["equal_spp", "equal_time"].filter((k) => metrics[k]);
+  if (tables.length !== blocks.length) fail(`expected ${blocks.length} summary tables, found ${tables.length}`);
+  const wanted = ["max rel. sq. err.", "px > 10\u00d7 off"].concat(
+    nseeds > 1 ? ["median relMSE", "[min, max]"] : ["relMSE"]);
+  tables.forEach((rows, i) => {
+    const head = rows[0] || [];
+    for (const w of wanted) if (!head.includes(w)) fail(`summary table ${i + 1} lacks the column '${w}'`);
+    const strategies = metrics[blocks[i]].strategies;
+    if (rows.length !== strategies.length + 1) fail(`summary table ${i + 1}: ${rows.length - 1} rows for ${strategies.length} strategies`);
+    for (const w of ["max rel. sq. err.", "px > 10\u00d7 off"]) {
+      const col = head.indexOf(w);
+      for (const r of rows.slice(1))
+        if (col >= 0 && !/^[0-9]/.test(r[col] || "")) fail(`summary table ${i + 1}, ${r[0]}: '${w}' is '${r[col]}'`);
+    }
+  });
+  const tailRows = await page.evaluate(() => Array.from(document.querySelectorAll("table.tail")).map((t) => t.rows.length));
+  if ((metrics.regions || []).length && (tailRows.length !== blocks.length || tailRows.some((n) => n !== metrics.regions.length + 2)))
+    fail(`expected ${blocks.length} per-object tail tables of ${metrics.regions.length} objects, found rows ${JSON.stringify(tailRows)}`);
 
   if (screenshot) await page.screenshot({ path: screenshot, fullPage: true });
   console.log(`check_report: ${imgs.length} images, ${figures.length} plots, ${expected.length} expected images checked`);

@@ -1,0 +1,63 @@
+// Image error metrics of `envpis compare`: an image against the reference, over the whole image and over
+// each object's pixels (DESIGN.md section 5). Every metric derives from one per-pixel quantity, the
+// relative squared error e = mean over the three channels of (I - R)^2 / (R^2 + 0.01):
+//   relMSE            mean of e over the pixels, with its standard error from the spread of e,
+//   max_rel_sq_error  the largest e (the worst pixel: a firefly, or a blotch of bias),
+//   pixels_over_10x   how many pixels have e > 100, i.e. are "more than 10x off" (for a grey pixel:
+//                     |I - R| > 10 sqrt(R^2 + 0.01), about 10 R for R well above 0.1).
+// relMSE alone hides a strategy whose error is a few huge pixels; the last two show that tail.
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace envpis::app {
+
+/// Offset of the denominator of the relative error, (I - R)^2 / (R^2 + kRelEpsilon): keeps black
+/// reference pixels from dominating.
+constexpr double kRelEpsilon = 0.01;
+/// A pixel is more than 10x off when its relative squared error exceeds 10^2.
+constexpr double kTailThreshold = 100;
+
+/// The relative squared error of one RGB pixel (three floats) against the reference's.
+double pixel_rel_sq_error(const float* rgb, const float* ref_rgb);
+
+/// The metrics of one set of pixels (the image, or one object's pixels). NaN when the set is empty
+/// (and `z` when both variances are 0; `relmse_stderr` for a single pixel).
+struct PixelSetMetrics {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::size_t pixels = 0;
+  double relmse = kNaN;
+  double relmse_stderr = kNaN;     // standard error of relmse from the spread of the per-pixel terms
+  double mean = kNaN;              // mean over pixels of (R + G + B) / 3
+  double z = kNaN;                 // (mean - reference mean) / sqrt(var + reference var)
+  double max_rel_sq_error = kNaN;  // the largest per-pixel relative squared error
+  std::size_t pixels_over_10x = 0; // pixels whose relative squared error exceeds kTailThreshold
+};
+
+struct ImageMetrics {
+  PixelSetMetrics image;                 // every pixel
+  std::vector<PixelSetMetrics> regions;  // one per entry of `region_ids` given to measure()
+  std::vector<float> per_pixel;          // each pixel's relative squared error (the error map)
+};
+
+/// An RGB image (3 floats per pixel) and its per-pixel variance (of the mean of the channels, the
+/// renderer's variance AOV).
+struct NoisyImage {
+  const std::vector<float>& rgb;
+  const std::vector<float>& variance;
+};
+
+/// `image` against `reference` (same size); region r is the pixels whose `object_id` is region_ids[r].
+ImageMetrics measure(const NoisyImage& image, const NoisyImage& reference, const std::vector<int>& object_id,
+                     const std::vector<int>& region_ids);
+
+/// The relMSE the reference's own noise adds to every measurement: the mean over pixels of
+/// var(R) / (R^2 + kRelEpsilon), with R the mean of the channels.
+double reference_floor(const NoisyImage& reference);
+
+/// The median of `v` (the mean of the two middle values for an even count); NaN for an empty `v`.
+double median(std::vector<double> v);
+
+}  // namespace envpis::app
