@@ -50,10 +50,8 @@ class RowMaxTree {
   std::vector<float> tree_;
 };
 
-// The outline of a texel: corners and edge midpoints, in texel units.
+// The outline of a texel: its corners and edge midpoints, going round.
 constexpr int kOutline = 8;
-constexpr float kOutlineX[kOutline] = {0, 0.5f, 1, 1, 1, 0.5f, 0, 0};
-constexpr float kOutlineY[kOutline] = {0, 0, 0, 0.5f, 1, 1, 1, 0.5f};
 
 // Texel range [lo, hi] whose bilinear footprints can reach pixel coordinates [a, b]: the margin covers
 // the outline's curvature between its sample points.
@@ -76,6 +74,24 @@ bool winds_around_pole(const float* us) {
   return std::fabs(turns) > 0.5f;
 }
 
+// Map coordinates (u, v) and map-space z of points along one horizontal line of the table.
+struct Line {
+  std::vector<float> u, v, z;
+};
+
+// `count` points (i * step, y) of the equal-area square, i = 0 .. count - 1, in the map's coordinates.
+void map_line(const EnvironmentMap& map, bool latlong, float y, int count, float step, Line& out) {
+  std::vector<float> su(count), sv(count, y), dx(count), dy(count), dz(count);
+  for (int i = 0; i < count; ++i) su[i] = std::min(1.0f, float(i) * step);
+  equal_area_square_to_sphere(static_cast<std::size_t>(count), su.data(), sv.data(), dx.data(), dy.data(), dz.data());
+  out.u.resize(count), out.v.resize(count), out.z.resize(count);
+  for (int i = 0; i < count; ++i) {
+    const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
+    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
+    out.u[i] = p.x, out.v[i] = p.y, out.z[i] = md.z;
+  }
+}
+
 }  // namespace
 
 std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
@@ -86,31 +102,33 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
   // An outline point this close to a lat-long pole (a thousandth of a texel side) has no usable azimuth.
   const float pole_z = std::cos(1e-3f * std::sqrt(4.0f * kPi) / float(N));
   std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
+  const float inv_n = 1.0f / float(N);
 
   tbb::parallel_for(tbb::blocked_range<int>(0, N), [&](const tbb::blocked_range<int>& rows) {
-    const std::size_t m = static_cast<std::size_t>(N) * kOutline;
-    std::vector<float> su(m), sv(m), dx(m), dy(m), dz(m);
+    // Outline points are shared: the corners and horizontal midpoints lie on the lines y and y + 1
+    // (2N + 1 points each), the vertical midpoints on the line y + 1/2 (N + 1 points).
+    Line top, mid, bottom;
+    map_line(map, latlong, float(rows.begin()) * inv_n, 2 * N + 1, 0.5f * inv_n, top);
     for (int y = rows.begin(); y < rows.end(); ++y) {
-      for (int x = 0; x < N; ++x)
-        for (int k = 0; k < kOutline; ++k) {
-          su[x * kOutline + k] = (float(x) + kOutlineX[k]) / float(N);
-          sv[x * kOutline + k] = (float(y) + kOutlineY[k]) / float(N);
-        }
-      equal_area_square_to_sphere(m, su.data(), sv.data(), dx.data(), dy.data(), dz.data());
+      map_line(map, latlong, (float(y) + 0.5f) * inv_n, N + 1, inv_n, mid);
+      map_line(map, latlong, float(y + 1) * inv_n, 2 * N + 1, 0.5f * inv_n, bottom);
       for (int x = 0; x < N; ++x) {
+        // Around the texel, in kOutline's order.
+        const std::pair<const Line*, int> at[kOutline] = {{&top, 2 * x},        {&top, 2 * x + 1}, {&top, 2 * x + 2},
+                                                          {&mid, x + 1},        {&bottom, 2 * x + 2},
+                                                          {&bottom, 2 * x + 1}, {&bottom, 2 * x}, {&mid, x}};
         float umin = 2, umax = -2, vmin = 2, vmax = -2, us[kOutline];
         bool north = false, south = false;
         float zsum = 0;
         for (int k = 0; k < kOutline; ++k) {
-          const std::size_t i = static_cast<std::size_t>(x) * kOutline + k;
-          const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
-          const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
-          us[k] = p.x;
-          vmin = std::min(vmin, p.y);
-          vmax = std::max(vmax, p.y);
-          zsum += md.z;
-          north = north || md.z > pole_z;
-          south = south || md.z < -pole_z;
+          const Line& l = *at[k].first;
+          const int i = at[k].second;
+          us[k] = l.u[i];
+          vmin = std::min(vmin, l.v[i]);
+          vmax = std::max(vmax, l.v[i]);
+          zsum += l.z[i];
+          north = north || l.z[i] > pole_z;
+          south = south || l.z[i] < -pole_z;
         }
         for (float u : us) umin = std::min(umin, u), umax = std::max(umax, u);
         float peak;
@@ -152,6 +170,7 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
         }
         peaks[static_cast<std::size_t>(y) * N + x] = peak;
       }
+      std::swap(top, bottom);
     }
   });
   return peaks;
