@@ -62,6 +62,9 @@ EnvironmentMap make_procedural_sky(const SkyOptions& o) {
     }
   EnvironmentMapOptions mo;
   mo.layout = MapLayout::LatLong;
+  // The texels were computed at latlong_to_direction(uv), the map-space direction, which is the world
+  // direction exactly for a Legacy map without rotation.
+  mo.orientation = LatLongOrientation::Legacy;
   return EnvironmentMap::from_pixels(o.width, o.height, std::move(px), mo);
 }
 
