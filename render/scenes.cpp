@@ -512,13 +512,18 @@ std::shared_ptr<const EnvironmentMap> parse_environment(const Fields& f, const f
   EnvironmentMapOptions mo;
   mo.rotation = Mat3::rotate_z(f.number("rotation", 0.0f));
   mo.scale = f.number_in("scale", 1.0f, 0.0f, 1e9f);
-  if (f.has("layout")) {
+  // An optional named value read with the library's parser, whose error names the field.
+  auto named = [&f](const std::string& key, auto parse, auto value) {
+    if (!f.has(key)) return value;
     try {
-      mo.layout = parse_map_layout(f.string("layout"));
+      return parse(f.string(key));
     } catch (const Error& e) {
-      f.fail_at(f.sub("layout"), e.what());
+      f.fail_at(f.sub(key), e.what());
     }
-  }
+  };
+  mo.layout = named("layout", parse_map_layout, mo.layout);
+  mo.orientation = named("orientation", parse_latlong_orientation, mo.orientation);
+  mo.filter = named("filter", parse_map_filter, mo.filter);
   f.finish();
   *desc = file;
   try {

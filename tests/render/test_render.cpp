@@ -503,6 +503,24 @@ TEST(SceneFile, ShippedScenesLoadAndRender) {
   EXPECT_GE(count, 2);
 }
 
+// An environment file's "orientation" and "filter" fields reach the map (default: panorama, bilinear).
+TEST(SceneFile, EnvironmentOrientationAndFilterFields) {
+  const std::string sunset = std::string(kBlenderWorldDir) + "/sunset.exr";
+  if (!fs::exists(sunset)) GTEST_SKIP() << "no " << sunset;
+  TempDir dir;
+  std::string text = scene_json(R"({"type": "sphere", "center": [0, 0, 1], "radius": 1, "material": "gold"})");
+  const std::size_t sky = text.find(R"({"sky")"), sky_end = text.find('}', text.find('}', sky) + 1);
+  std::string legacy = text;
+  legacy.replace(sky, sky_end + 1 - sky, R"({"file": ")" + sunset + R"(", "orientation": "legacy", "filter": "nearest"})");
+  const Scene a = load_scene_file(dir.write("legacy.json", legacy));
+  EXPECT_EQ(a.environment().orientation(), LatLongOrientation::Legacy);
+  EXPECT_EQ(a.environment().filter(), MapFilter::Nearest);
+  text.replace(sky, sky_end + 1 - sky, R"({"file": ")" + sunset + R"("})");
+  const Scene b = load_scene_file(dir.write("default.json", text));
+  EXPECT_EQ(b.environment().orientation(), LatLongOrientation::Panorama);
+  EXPECT_EQ(b.environment().filter(), MapFilter::Bilinear);
+}
+
 std::string load_error(const std::string& text, const TempDir& dir) {
   const std::string path = dir.write("bad.json", text);
   try {
@@ -566,6 +584,10 @@ TEST(SceneFile, CleanErrorsForBadFilesAndFields) {
       {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"nope.exr\", \"x\""),
        "environment"},
       {scene_json(sphere).replace(scene_json(sphere).find("\"fov\": 40"), 9, "\"fov\": 400"), "camera.fov"},
+      {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"x.exr\", \"orientation\": \"up\", \"x\""),
+       "environment.orientation: unknown lat-long orientation 'up'"},
+      {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"x.exr\", \"filter\": \"cubic\", \"x\""),
+       "environment.filter: unknown map filter 'cubic'"},
   };
   for (const Case& c : cases) {
     const std::string err = load_error(c.text, dir);
@@ -619,6 +641,10 @@ TEST(Command, RejectsBadOptionsWithOneLineErrors) {
       {"--out " + (dir.path / "x.png").string(), "OpenEXR"},
       {"", "--out is required"},
       {"--env /nonexistent.exr --out " + out, "nonexistent.exr"},
+      {"--env-orientation legacy --out " + out, "--env-orientation needs --env"},
+      {"--env-filter nearest --out " + out, "--env-filter needs --env"},
+      {"--env x.exr --env-orientation mirrored --out " + out, "--env-orientation: unknown lat-long orientation"},
+      {"--env x.exr --env-filter cubic --out " + out, "--env-filter: unknown map filter 'cubic'"},
   };
   for (const auto& [args, expect] : cases) {
     const CommandResult r = run_envpis(args);
