@@ -554,7 +554,19 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   cam.from = cf.vec3("from");
   cam.to = cf.vec3("to");
   cam.up = cf.vec3("up", {0, 0, 1});
-  cam.vfov_degrees = cf.number_in("fov", 40.0f, 0.01f, 179.0f);
+  const std::string type = cf.string("type", "perspective");
+  if (type == "perspective") {
+    if (cf.has("ortho_height")) cf.fail_at(cf.sub("ortho_height"), "only an orthographic camera has a film height");
+    cam.vfov_degrees = cf.number_in("fov", 40.0f, 0.01f, 179.0f);
+  } else if (type == "orthographic") {
+    if (cf.has("fov")) cf.fail_at(cf.sub("fov"), "an orthographic camera has no field of view (give ortho_height)");
+    cam.projection = Projection::Orthographic;
+    cam.ortho_height = cf.number("ortho_height");
+    if (!(cam.ortho_height > 0 && std::isfinite(cam.ortho_height)))
+      cf.fail_at(cf.sub("ortho_height"), "must be a positive finite number");
+  } else {
+    cf.fail_at(cf.sub("type"), "unknown camera type '" + type + "' (expected perspective or orthographic)");
+  }
   cam.width = cf.integer("width", 640, 1, 16384);
   cam.height = cf.integer("height", 360, 1, 16384);
   cf.finish();
