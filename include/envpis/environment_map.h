@@ -3,10 +3,11 @@
 //
 // Conventions: +Z is up. A lat-long (equirectangular) image maps row v in [0,1] to the polar angle
 // theta = pi v from +Z (top row = zenith), and by default (LatLongOrientation::Panorama, the convention
-// of Blender/Cycles and three.js) column u to the world direction of azimuth phi (from +X towards +Y)
-// with u = 0.5 - phi / (2 pi): +X is the image's centre column, +Y is at u = 0.25, -Y at u = 0.75.
-// Seen from inside the sphere the panorama then looks like the photograph. LatLongOrientation::Legacy
-// is envpis's earlier u = phi / (2 pi), which shows every photograph mirrored. An equal-area image is
+// of Blender/Cycles) column u to the world direction of azimuth phi (from +X towards +Y) with
+// u = 0.5 - phi / (2 pi): +X is the image's centre column, +Y is at u = 0.25, -Y at u = 0.75. Seen
+// from inside the sphere the panorama then looks like the photograph, as in other renderers and
+// panorama viewers. LatLongOrientation::Legacy is envpis's earlier u = phi / (2 pi), which shows every
+// photograph mirrored. An equal-area image is
 // Clarberg's octahedral square (see equal_area.h); the orientation does not apply to it.
 #pragma once
 
@@ -30,7 +31,7 @@ const char* to_string(MapLayout layout);
 
 /// Which way a lat-long image's columns run around +Z (see the file comment).
 enum class LatLongOrientation {
-  Panorama,  ///< u = 0.5 - phi / (2 pi): +X at u = 0.5, +Y at u = 0.25 (Blender/Cycles, three.js)
+  Panorama,  ///< u = 0.5 - phi / (2 pi): +X at u = 0.5, +Y at u = 0.25 (Blender/Cycles)
   Legacy,    ///< u = phi / (2 pi): +X at u = 0, +Y at u = 0.25 (envpis before; mirrors photographs)
 };
 
@@ -38,7 +39,9 @@ enum class LatLongOrientation {
 LatLongOrientation parse_latlong_orientation(const std::string& s);
 const char* to_string(LatLongOrientation orientation);
 
-/// How eval() reads between texel centres.
+/// How eval() reads between texel centres. Nearest gives the image's values as they are (a map with
+/// hard-edged regions, comparisons with renderers set to such a look-up), and a radiance that is
+/// constant over each texel, as the texels of an importance table built from the image are.
 enum class MapFilter {
   Bilinear,  ///< bilinear interpolation of the four nearest texels (smooth; the default)
   Nearest,   ///< the texel the direction falls in: piecewise constant, exactly the image's values
