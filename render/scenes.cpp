@@ -62,6 +62,9 @@ EnvironmentMap make_procedural_sky(const SkyOptions& o) {
     }
   EnvironmentMapOptions mo;
   mo.layout = MapLayout::LatLong;
+  // The texels were computed at latlong_to_direction(uv), the map-space direction, which is the world
+  // direction exactly for a Legacy map without rotation.
+  mo.orientation = LatLongOrientation::Legacy;
   return EnvironmentMap::from_pixels(o.width, o.height, std::move(px), mo);
 }
 
@@ -509,13 +512,18 @@ std::shared_ptr<const EnvironmentMap> parse_environment(const Fields& f, const f
   EnvironmentMapOptions mo;
   mo.rotation = Mat3::rotate_z(f.number("rotation", 0.0f));
   mo.scale = f.number_in("scale", 1.0f, 0.0f, 1e9f);
-  if (f.has("layout")) {
+  // An optional named value read with the library's parser, whose error names the field.
+  auto named = [&f](const std::string& key, auto parse, auto value) {
+    if (!f.has(key)) return value;
     try {
-      mo.layout = parse_map_layout(f.string("layout"));
+      return parse(f.string(key));
     } catch (const Error& e) {
-      f.fail_at(f.sub("layout"), e.what());
+      f.fail_at(f.sub(key), e.what());
     }
-  }
+  };
+  mo.layout = named("layout", parse_map_layout, mo.layout);
+  mo.orientation = named("orientation", parse_latlong_orientation, mo.orientation);
+  mo.filter = named("filter", parse_map_filter, mo.filter);
   f.finish();
   *desc = file;
   try {
@@ -546,7 +554,19 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   cam.from = cf.vec3("from");
   cam.to = cf.vec3("to");
   cam.up = cf.vec3("up", {0, 0, 1});
-  cam.vfov_degrees = cf.number_in("fov", 40.0f, 0.01f, 179.0f);
+  const std::string type = cf.string("type", "perspective");
+  if (type == "perspective") {
+    if (cf.has("ortho_height")) cf.fail_at(cf.sub("ortho_height"), "only an orthographic camera has a film height");
+    cam.vfov_degrees = cf.number_in("fov", 40.0f, 0.01f, 179.0f);
+  } else if (type == "orthographic") {
+    if (cf.has("fov")) cf.fail_at(cf.sub("fov"), "an orthographic camera has no field of view (give ortho_height)");
+    cam.projection = Projection::Orthographic;
+    cam.ortho_height = cf.number("ortho_height");
+    if (!(cam.ortho_height > 0 && std::isfinite(cam.ortho_height)))
+      cf.fail_at(cf.sub("ortho_height"), "must be a positive finite number");
+  } else {
+    cf.fail_at(cf.sub("type"), "unknown camera type '" + type + "' (expected perspective or orthographic)");
+  }
   cam.width = cf.integer("width", 640, 1, 16384);
   cam.height = cf.integer("height", 360, 1, 16384);
   cf.finish();

@@ -96,6 +96,24 @@ const char* to_string(MapLayout layout) {
   return "?";
 }
 
+LatLongOrientation parse_latlong_orientation(const std::string& s) {
+  if (s == "panorama") return LatLongOrientation::Panorama;
+  if (s == "legacy") return LatLongOrientation::Legacy;
+  throw Error("unknown lat-long orientation '" + s + "' (expected panorama or legacy)");
+}
+
+const char* to_string(LatLongOrientation orientation) {
+  return orientation == LatLongOrientation::Legacy ? "legacy" : "panorama";
+}
+
+MapFilter parse_map_filter(const std::string& s) {
+  if (s == "bilinear") return MapFilter::Bilinear;
+  if (s == "nearest") return MapFilter::Nearest;
+  throw Error("unknown map filter '" + s + "' (expected bilinear or nearest)");
+}
+
+const char* to_string(MapFilter filter) { return filter == MapFilter::Nearest ? "nearest" : "bilinear"; }
+
 Point2 direction_to_latlong(Vec3 d) {
   const float len = length(d);
   const float z = std::clamp(d.z / len, -1.0f, 1.0f);
@@ -256,8 +274,14 @@ void EnvironmentMap::finish(const EnvironmentMapOptions& options) {
     throw Error("an equal-area environment map must be square, got " + std::to_string(width_) + "x" +
                 std::to_string(height_));
   scale_ = options.scale;
-  rotation_ = options.rotation;
-  inverse_rotation_ = rotation_.transposed();
+  orientation_ = options.orientation;
+  filter_ = options.filter;
+  // to_world = rotation * mirror(x -> -x) for a Panorama lat-long map: the mirror negates the
+  // rotation's first column. (See to_world in the header for why the orientation lives here.)
+  to_world_ = options.rotation;
+  if (layout_ == MapLayout::LatLong && orientation_ == LatLongOrientation::Panorama)
+    for (auto& row : to_world_.m) row[0] = -row[0];
+  to_map_ = to_world_.transposed();
   max_radiance_ = 0;
   for (float& v : pixels_) {
     if (std::isnan(v)) {
@@ -325,8 +349,28 @@ Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
   return acc;
 }
 
+// The texel that texture point (x, y) falls in. Outside [0,1) a lat-long map wraps in u and clamps in v;
+// an equal-area map wraps across its edges as the sphere does (equal_area_wrap).
+Rgb EnvironmentMap::nearest(float x, float y) const {
+  const float fx = std::floor(x * width_), fy = std::floor(y * height_);
+  // Far outside the image (only for absurd inputs) the float -> int conversion must not overflow.
+  int xi = static_cast<int>(std::clamp(fx, -2.0f * width_, 2.0f * width_));
+  int yi = static_cast<int>(std::clamp(fy, -2.0f * height_, 2.0f * height_));
+  if (layout_ == MapLayout::EqualArea) {
+    if (!equal_area_wrap(width_, xi, yi)) {
+      xi = std::clamp(xi, 0, width_ - 1);
+      yi = std::clamp(yi, 0, height_ - 1);
+    }
+    return texel(xi, yi);
+  }
+  xi %= width_;
+  if (xi < 0) xi += width_;
+  return texel(xi, std::clamp(yi, 0, height_ - 1));
+}
+
 Rgb EnvironmentMap::eval_texture(Point2 uv) const {
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
+  if (filter_ == MapFilter::Nearest) return nearest(uv.x, uv.y);
   return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
 }
 

@@ -72,6 +72,7 @@ TEST_F(CliTable, SunsetWritesPicturesAndSummary) {
                           " --normal 0,0,1 --wo 1,0,1 --proxy diffuse=0.3,reflection=0.7,alpha_r=0.3 --seed 7");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("1024x512 latlong"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("orientation panorama  filter bilinear"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("T=12 (144 top cells)  F=61  N=732"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("build:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("memory:  table"), std::string::npos) << r.output;
@@ -89,6 +90,8 @@ TEST_F(CliTable, SunsetWritesPicturesAndSummary) {
   const nlohmann::json j = nlohmann::json::parse(f);
   EXPECT_EQ(j["map"]["width"], 1024);
   EXPECT_EQ(j["map"]["layout"], "latlong");
+  EXPECT_EQ(j["map"]["orientation"], "panorama");
+  EXPECT_EQ(j["map"]["filter"], "bilinear");
   EXPECT_EQ(j["table"]["top_resolution"], 12);
   EXPECT_EQ(j["table"]["fine_resolution"], 732);
   EXPECT_GT(j["table"]["build_seconds"].get<double>(), 0.0);
@@ -111,6 +114,20 @@ TEST_F(CliTable, SunsetWritesPicturesAndSummary) {
   // Samples land only in cells of positive product probability.
   for (int c = 0; c < 144; ++c)
     if (prod[c] == 0) EXPECT_EQ(hits[c], 0) << "cell " << c;
+}
+
+// --env-orientation and --env-filter reach the map: the output and summary.json name them.
+TEST_F(CliTable, OrientationAndFilterOptions) {
+  if (!envpis::test::have_blender_maps()) GTEST_SKIP() << "blender-data maps not installed";
+  const std::string out = path("legacy");
+  const CmdResult r = run_table("--env " + quote(envpis::test::blender_map("studio")) + " --out " + quote(out) +
+                                " --fine 48 --samples 10 --env-orientation legacy --env-filter nearest");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("orientation legacy  filter nearest"), std::string::npos) << r.output;
+  std::ifstream f(fs::path(out) / "summary.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["map"]["orientation"], "legacy");
+  EXPECT_EQ(j["map"]["filter"], "nearest");
 }
 
 struct ErrorCase {
@@ -168,6 +185,8 @@ TEST_F(CliTable, BadOptions) {
       {"--proxy alpha_r=1.5" + env, "--proxy alpha_r: must be in [0, 1]"},
       {"--transform fancy" + env, "--transform: unknown roughness transform 'fancy'"},
       {"--layout cube" + env, "--layout: unknown map layout 'cube'"},
+      {"--env-orientation mirrored" + env, "--env-orientation: unknown lat-long orientation 'mirrored'"},
+      {"--env-filter cubic" + env, "--env-filter: unknown map filter 'cubic'"},
       {"--scale -1" + env, "--scale: must be >= 0"},
       {"--out " + quote(path("o3")), "--env FILE is required"},
       {"--env " + map, "--out DIR is required"},

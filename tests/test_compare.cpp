@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include "cli_util.h"
 #include "metrics.h"
+#include "test_util.h"
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -133,6 +134,8 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --seed 2 --seeds 3 --ref-seed 4" + o, "--ref-seed 4 is one of the measured seeds 2..4 (--seed, --seeds)"},
       {"compare --env /nonexistent/map.exr" + o, "cannot load environment map '/nonexistent/map.exr': no such file"},
       {"compare --scene nosuchscene" + o, "unknown scene"},
+      {"compare --env-orientation legacy" + o, "--env-orientation needs --env"},
+      {"compare --env x.exr --env-filter cubic" + o, "--env-filter: unknown map filter 'cubic'"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
@@ -169,6 +172,8 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_EQ(m["reference"]["strategy"], "mis");
   EXPECT_EQ(m["closed_surfaces"], true);
   EXPECT_EQ(m["top_resolution"], 12);
+  EXPECT_EQ(m["environment_lookup"]["orientation"], "panorama");
+  EXPECT_EQ(m["environment_lookup"]["filter"], "bilinear");
   EXPECT_NE(m["reference"]["seed"], m["seed"]) << "the reference must use another seed";
   EXPECT_FALSE(m["reference"]["cached"].get<bool>());
   EXPECT_TRUE(m["plots"].is_null());
@@ -257,6 +262,18 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   int w2 = 0, h2 = 0;
   EXPECT_EQ(read_rgb(out / "images" / "reference.exr", &w2, &h2), ref);
   EXPECT_EQ(m2["equal_spp"]["strategies"][0]["relmse"], m["equal_spp"]["strategies"][0]["relmse"]);
+
+  // The lat-long orientation and the filter are part of the reference's cache key.
+  if (envpis::test::have_blender_maps()) {
+    const std::string env = " --env '" + envpis::test::blender_map("sunset") + "'";
+    for (const char* lookup : {"", " --env-orientation legacy", " --env-filter nearest"}) {
+      const CmdResult r3 = run(args + env + lookup);
+      ASSERT_EQ(r3.code, 0) << r3.output;
+      json m3;
+      std::ifstream(out / "metrics.json") >> m3;
+      EXPECT_FALSE(m3["reference"]["cached"].get<bool>()) << lookup;
+    }
+  }
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
 }

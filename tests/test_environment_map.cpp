@@ -321,29 +321,142 @@ TEST(EnvironmentMap, RepairsNanInfAndNegativeTexels) {
   EXPECT_EQ(m.eval({std::nanf(""), 0, 1}).r, 0.0f);
 }
 
-TEST(EnvironmentMap, LatLongConventionAndBilinearFiltering) {
+// The world direction at azimuth phi (from +X towards +Y) and polar angle theta (from +Z), written
+// here independently of the library's lat-long formula.
+Vec3 spherical(double phi, double theta) {
+  return {float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta))};
+}
+
+TEST(EnvironmentMap, LatLongBilinearFilteringAndMapSpace) {
   const int w = 16, h = 8;
   const auto m = synthetic_latlong(w, h, [](int x, int y) { return float(x + 100 * y); });
-  // Texel centres return the texel.
+  // Texel centres return the texel (to_world(latlong_to_direction(uv)) is the direction of (u, v)).
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const Vec3 d = latlong_to_direction({(x + 0.5f) / w, (y + 0.5f) / h});
+      const Vec3 d = m.to_world(latlong_to_direction({(x + 0.5f) / w, (y + 0.5f) / h}));
       EXPECT_NEAR(m.eval(d).r, float(x + 100 * y), 1e-3f) << x << "," << y;
     }
   // Half-way between two texel centres: the average. The u seam wraps.
-  EXPECT_NEAR(m.eval(latlong_to_direction({3.0f / w, 2.5f / h})).r, 202.5f, 1e-3f);
-  EXPECT_NEAR(m.eval(latlong_to_direction({0.0f, 2.5f / h})).r, 0.5f * (200 + 215), 1e-2f);
-  // +Z is up: the top row; azimuth 0 is +X.
+  EXPECT_NEAR(m.eval(m.to_world(latlong_to_direction({3.0f / w, 2.5f / h}))).r, 202.5f, 1e-3f);
+  EXPECT_NEAR(m.eval(m.to_world(latlong_to_direction({0.0f, 2.5f / h}))).r, 0.5f * (200 + 215), 1e-2f);
+  EXPECT_NEAR(m.eval_texture({0.0f, 2.5f / h}).r, 0.5f * (200 + 215), 1e-2f);
+  // Map space: +Z is up (the top row), azimuth 0 is +X, u grows towards +Y.
   EXPECT_EQ(direction_to_latlong({0, 0, 1}).y, 0.0f);
   EXPECT_NEAR(direction_to_latlong({1, 0, 0}).x, 0.0f, 1e-6f);
   EXPECT_NEAR(direction_to_latlong({0, 1, 0}).x, 0.25f, 1e-6f);
-  // Rotation about Z and scale.
+  // Rotation about Z and scale: the rotated map shows in direction R d what the plain one shows in d.
   EnvironmentMapOptions o;
   o.rotation = Mat3::rotate_z(90);
   o.scale = 2;
   const auto r = synthetic_latlong(w, h, [](int x, int y) { return float(x + 100 * y); }, o);
-  const Vec3 d = latlong_to_direction({4.5f / w, 3.5f / h});
+  const Vec3 d = m.to_world(latlong_to_direction({4.5f / w, 3.5f / h}));
   EXPECT_NEAR(r.eval(o.rotation * d).r, 2 * m.eval(d).r, 1e-2f);
+}
+
+TEST(EnvironmentMap, LatLongOrientation) {
+  const int w = 16, h = 8;
+  auto f = [](int x, int y) { return float(x * x + 1000 * y); };  // no mirror symmetry in u
+  EnvironmentMapOptions legacy;
+  legacy.orientation = LatLongOrientation::Legacy;
+  const auto pano = synthetic_latlong(w, h, f);
+  const auto old = synthetic_latlong(w, h, f, legacy);
+  EXPECT_EQ(pano.orientation(), LatLongOrientation::Panorama);  // the default
+  EXPECT_EQ(old.orientation(), LatLongOrientation::Legacy);
+  // Every texel centre, from the convention's own formula: Panorama u = 0.5 - phi / 2pi, Legacy u = phi / 2pi.
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double u = (x + 0.5) / w, theta = M_PI * (y + 0.5) / h;
+      EXPECT_NEAR(pano.eval(spherical(2 * M_PI * (0.5 - u), theta)).r, f(x, y), 1e-2f) << x << "," << y;
+      EXPECT_NEAR(old.eval(spherical(2 * M_PI * u, theta)).r, f(x, y), 1e-2f) << x << "," << y;
+    }
+  // On the equator (half-way between rows 3 and 4): +X reads u = 0.5 (columns 7 and 8), +Y u = 0.25
+  // (columns 3 and 4), -Y u = 0.75; under Legacy +X reads u = 0 (columns 15 and 0).
+  auto equator = [&](int x0, int x1) { return 0.25f * (f(x0, 3) + f(x1, 3) + f(x0, 4) + f(x1, 4)); };
+  EXPECT_NEAR(pano.eval({1, 0, 0}).r, equator(7, 8), 1e-2f);
+  EXPECT_NEAR(pano.eval({0, 1, 0}).r, equator(3, 4), 1e-2f);
+  EXPECT_NEAR(pano.eval({0, -1, 0}).r, equator(11, 12), 1e-2f);
+  EXPECT_NEAR(pano.eval({-1, 0, 0}).r, equator(15, 0), 1e-2f);
+  EXPECT_NEAR(old.eval({1, 0, 0}).r, equator(15, 0), 1e-2f);
+  EXPECT_NEAR(old.eval({0, 1, 0}).r, equator(3, 4), 1e-2f);
+  EXPECT_NEAR(old.eval({-1, 0, 0}).r, equator(7, 8), 1e-2f);
+  // The same through map space.
+  EXPECT_NEAR(direction_to_latlong(pano.to_map({1, 0, 0})).x, 0.5f, 1e-6f);
+  EXPECT_NEAR(direction_to_latlong(pano.to_map({0, 1, 0})).x, 0.25f, 1e-6f);
+  EXPECT_NEAR(direction_to_latlong(old.to_map({1, 0, 0})).x, 0.0f, 1e-6f);
+  // A rotation turns the panorama about +Z: rotated by 90 degrees, +Y reads what +X did.
+  EnvironmentMapOptions rot;
+  rot.rotation = Mat3::rotate_z(90);
+  const auto turned = synthetic_latlong(w, h, f, rot);
+  EXPECT_NEAR(turned.eval({0, 1, 0}).r, equator(7, 8), 1e-2f);
+  EXPECT_NEAR(turned.eval(spherical(M_PI / 2 + 0.3, 1.0)).r, pano.eval(spherical(0.3, 1.0)).r, 1e-2f);
+  // Equal-area maps have no orientation: the option changes nothing.
+  auto g = [](int x, int y) { return float(x * x + 7 * y); };
+  const auto ea = synthetic_latlong(8, 8, g), ea_old = synthetic_latlong(8, 8, g, legacy);
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 d = random_direction(rng);
+    ASSERT_EQ(ea.eval(d).r, ea_old.eval(d).r);
+    ASSERT_NEAR(length(ea.to_map(d) - d), 0.0f, 1e-6f);
+  }
+  EXPECT_EQ(parse_latlong_orientation("panorama"), LatLongOrientation::Panorama);
+  EXPECT_EQ(parse_latlong_orientation("legacy"), LatLongOrientation::Legacy);
+  EXPECT_THROW(parse_latlong_orientation("mirrored"), Error);
+  EXPECT_STREQ(to_string(LatLongOrientation::Legacy), "legacy");
+}
+
+TEST(EnvironmentMap, NearestFilterIsPiecewiseConstant) {
+  const int w = 16, h = 8;
+  auto f = [](int x, int y) { return float(x * x + 1000 * y); };
+  EnvironmentMapOptions o;
+  o.filter = MapFilter::Nearest;
+  const auto bilinear = synthetic_latlong(w, h, f);
+  EXPECT_EQ(bilinear.filter(), MapFilter::Bilinear);  // the default
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<float> U(0.05f, 0.95f);  // inside a texel, off its edges
+  for (LatLongOrientation orientation : {LatLongOrientation::Panorama, LatLongOrientation::Legacy}) {
+    o.orientation = orientation;
+    const auto m = synthetic_latlong(w, h, f, o);
+    EXPECT_EQ(m.filter(), MapFilter::Nearest);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < 8; ++k) {
+          const Point2 uv{(x + U(rng)) / w, (y + U(rng)) / h};
+          ASSERT_EQ(m.eval_texture(uv).r, f(x, y));
+          ASSERT_EQ(m.eval(m.to_world(latlong_to_direction(uv))).r, f(x, y)) << x << "," << y;
+        }
+    // u wraps, v clamps.
+    EXPECT_EQ(m.eval_texture({1.0f, 0.5f}).r, f(0, 4));
+    EXPECT_EQ(m.eval_texture({-0.01f, 0.5f}).r, f(w - 1, 4));
+    EXPECT_EQ(m.eval_texture({0.01f, 1.0f}).r, f(0, h - 1));
+    EXPECT_EQ(m.eval_texture({0.01f, -0.5f}).r, f(0, 0));
+  }
+  // Bilinear is unchanged: a quarter of the way from texel (5, 2) to (6, 3).
+  const Point2 q{(5.75f) / w, (2.75f) / h};
+  const float expect = 0.75f * (0.75f * f(5, 2) + 0.25f * f(6, 2)) + 0.25f * (0.75f * f(5, 3) + 0.25f * f(6, 3));
+  EXPECT_NEAR(bilinear.eval_texture(q).r, expect, 1e-2f);
+  // Equal-area: the texel the square point falls in, across the edges too.
+  const int n = 8;
+  auto g = [](int x, int y) { return float(x * x + 7 * y); };
+  o.orientation = LatLongOrientation::Panorama;
+  const auto ea = synthetic_latlong(n, n, g, o);
+  ASSERT_EQ(ea.layout(), MapLayout::EqualArea);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const Point2 p{(x + U(rng)) / n, (y + U(rng)) / n};
+      ASSERT_EQ(ea.eval_texture(p).r, g(x, y));
+      ASSERT_EQ(ea.eval(ea.to_world(equal_area_square_to_sphere(p))).r, g(x, y));
+    }
+  EXPECT_EQ(ea.eval_texture({-0.01f, 0.3f}).r, g(0, n - 1 - 2));  // mirrored across the left edge
+  EXPECT_EQ(parse_map_filter("nearest"), MapFilter::Nearest);
+  EXPECT_EQ(parse_map_filter("bilinear"), MapFilter::Bilinear);
+  EXPECT_THROW(parse_map_filter("closest"), Error);
+  EXPECT_STREQ(to_string(MapFilter::Nearest), "nearest");
+  // Absurd texture coordinates stay in the image.
+  const auto ll = synthetic_latlong(w, h, f, o);
+  for (float big : {1e30f, -1e30f, 3e9f, -3e9f}) {
+    EXPECT_GE(ll.eval_texture({big, big}).r, 0.0f);
+    EXPECT_GE(ea.eval_texture({big, -big}).r, 0.0f);
+  }
 }
 
 TEST(EnvironmentMap, EqualAreaLayoutIsContinuousAcrossEdges) {

@@ -617,6 +617,10 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["scene"] = is_builtin_scene(a.common.scene) ? json(a.common.scene) : file_identity(a.common.scene);
   key["environment"] = a.common.env.empty() ? json(scene.environment_description()) : file_identity(a.common.env);
   if (!a.common.env.empty()) key["environment_transform"] = {a.common.env_rotation, a.common.env_scale};
+  // How the map is read changes the image whichever map it is (--env or the scene's), and references
+  // cached before the lat-long orientation became an option have no such entry: they do not match.
+  if (scene.has_environment())
+    key["environment_lookup"] = {to_string(scene.environment().orientation()), to_string(scene.environment().filter())};
   key["width"] = W;
   key["height"] = H;
   key["integrator"] = to_string(base.integrator);
@@ -888,6 +892,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
   if (!a.common.env.empty())
     j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", a.common.env_rotation)},
                                   {"scale", parse_number("--env-scale", a.common.env_scale)}};
+  if (scene.has_environment())
+    j["environment_lookup"] = {{"orientation", to_string(scene.environment().orientation())},
+                               {"filter", to_string(scene.environment().filter())}};
   json tj = json::object();
   for (const auto& [s, t] : tables) tj[to_string(s)] = t.build_seconds;
   j["table_seconds"] = tj;

@@ -75,6 +75,12 @@ void SceneOptionArgs::add_scene_options(CLI::App& sub) {
       ->type_name("FILE");
   sub.add_option("--env-rotation", env_rotation, "rotation of --env about +Z, degrees")->type_name("DEG");
   sub.add_option("--env-scale", env_scale, "radiance scale of --env (>= 0)")->type_name("FLOAT");
+  sub.add_option("--env-orientation", env_orientation,
+                 "lat-long --env: panorama (Blender/Cycles: +X at the centre column; default) or legacy (+X at "
+                 "the left edge, mirrored)")
+      ->type_name("O");
+  sub.add_option("--env-filter", env_filter, "radiance look-up in --env: bilinear (default) or nearest")
+      ->type_name("F");
 }
 
 void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
@@ -161,7 +167,15 @@ EnvironmentMapOptions SceneOptionArgs::map_options() const {
   mo.rotation = Mat3::rotate_z(
       static_cast<float>(parse_number_in("--env-rotation", env_rotation, -1e6, 1e6, "in [-1e6, 1e6] degrees")));
   mo.scale = static_cast<float>(parse_number_in("--env-scale", env_scale, 0, 3.0e38, ">= 0"));
-  if (env.empty() && (env_rotation != "0" || env_scale != "1")) throw Error("--env-rotation and --env-scale need --env");
+  if (!env_orientation.empty())
+    mo.orientation = with_option("--env-orientation", [&] { return parse_latlong_orientation(env_orientation); });
+  if (!env_filter.empty()) mo.filter = with_option("--env-filter", [&] { return parse_map_filter(env_filter); });
+  if (env.empty()) {  // they describe --env; a scene file's environment has its own fields
+    if (env_rotation != "0") throw Error("--env-rotation needs --env");
+    if (env_scale != "1") throw Error("--env-scale needs --env");
+    if (!env_orientation.empty()) throw Error("--env-orientation needs --env");
+    if (!env_filter.empty()) throw Error("--env-filter needs --env");
+  }
   return mo;
 }
 

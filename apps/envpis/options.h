@@ -24,6 +24,16 @@ double parse_number_in(const std::string& option, const std::string& text, doubl
 /// A decimal integer in lo..hi.
 long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi);
 std::string lower(std::string s);
+
+/// Runs a library parser and prefixes its error with the option's name ("--env-filter: unknown ...").
+template <class F>
+auto with_option(const std::string& option, F&& parse) {
+  try {
+    return parse();
+  } catch (const Error& e) {
+    throw Error(option + ": " + e.what());
+  }
+}
 /// Fails early (before anything slow) when the file `path` cannot be created or written; leaves no
 /// file behind that was not there.
 void check_writable_file(const std::string& path, const std::string& option);
@@ -34,6 +44,7 @@ void check_writable_file(const std::string& path, const std::string& option);
 struct SceneOptionArgs {
   std::string scene = "fig1";
   std::string env, env_rotation = "0", env_scale = "1";
+  std::string env_orientation, env_filter;  // empty: the library's defaults (panorama, bilinear)
   std::string integrator;
   std::string heuristic = "power";
   std::string sampler = "sobol";
@@ -47,14 +58,15 @@ struct SceneOptionArgs {
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
 
-  /// --scene, --env, --env-rotation, --env-scale.
+  /// --scene, --env, --env-rotation, --env-scale, --env-orientation, --env-filter.
   void add_scene_options(CLI::App& sub);
   /// --integrator, --heuristic, --sampler, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix,
   /// --closed-surfaces.
   void add_sampling_options(CLI::App& sub);
   /// Parses the sampling options into `o` (throws Error naming the option).
   void apply(render::RenderOptions& o) const;
-  /// Checks --env-rotation / --env-scale (throws Error naming the option).
+  /// Checks --env-rotation / --env-scale / --env-orientation / --env-filter (throws Error naming the
+  /// option; each needs --env).
   EnvironmentMapOptions map_options() const;
   /// --closed-surfaces: -1 for the scene's setting (not given), else 0 (off) or 1 (on); throws Error
   /// for any other value.

@@ -45,6 +45,7 @@ struct TableArgs {
   std::string env, out;
   std::string layout = "auto";
   std::string rotate = "0", scale = "1";
+  std::string orientation = "panorama", filter = "bilinear";
   std::string top = "12", fine = "0";
   std::string normal = "0,0,1", wo = "1,0,1";
   std::string proxy;  // empty: reflection=1, alpha_r=0.2
@@ -120,16 +121,6 @@ BsdfProxy parse_proxy(const std::string& text) {
     start = comma + 1;
   }
   return p;
-}
-
-// Runs a library parser and prefixes its error with the option's name.
-template <class F>
-auto with_option(const std::string& option, F&& parse) {
-  try {
-    return parse();
-  } catch (const Error& e) {
-    throw Error(option + ": " + e.what());
-  }
 }
 
 // Creates DIR (and parents) and checks that a file can be written in it.
@@ -348,6 +339,8 @@ void run_table(const TableArgs& a) {
   const float rotate = float(parse_number_in("--rotate", a.rotate, -1e6, 1e6, "in [-1e6, 1e6] degrees"));
   map_options.rotation = Mat3::rotate_z(rotate);
   map_options.scale = float(parse_number_in("--scale", a.scale, 0, 1e30, ">= 0"));
+  map_options.orientation = with_option("--env-orientation", [&] { return parse_latlong_orientation(a.orientation); });
+  map_options.filter = with_option("--env-filter", [&] { return parse_map_filter(a.filter); });
   ImportanceTableOptions table_options;
   table_options.top_resolution = int(parse_integer("--top", a.top, 1, 256));
   table_options.fine_resolution = int(parse_integer("--fine", a.fine, 0, 16384));
@@ -380,8 +373,9 @@ void run_table(const TableArgs& a) {
     throw Error("environment map '" + a.env +
                 "' has no positive radiance (black everywhere after repair and --scale): the importance "
                 "table would be empty, there is nothing to sample");
-  std::printf("map:     %s  %dx%d %s  scale %g  rotate %g deg\n", a.env.c_str(), map.width(), map.height(),
-              to_string(map.layout()), double(map.scale()), double(rotate));
+  std::printf("map:     %s  %dx%d %s  scale %g  rotate %g deg  orientation %s  filter %s\n", a.env.c_str(),
+              map.width(), map.height(), to_string(map.layout()), double(map.scale()), double(rotate),
+              map.layout() == MapLayout::LatLong ? to_string(map.orientation()) : "n/a", to_string(map.filter()));
   for (const std::string& w : map.warnings()) std::fprintf(stderr, "envpis table: warning: %s\n", w.c_str());
   write_png(out / "map.png", tonemap_map(map));
 
@@ -504,6 +498,8 @@ void run_table(const TableArgs& a) {
               {"layout", to_string(map.layout())},
               {"scale", map.scale()},
               {"rotate_degrees", rotate},
+              {"orientation", map.layout() == MapLayout::LatLong ? to_string(map.orientation()) : "n/a"},
+              {"filter", to_string(map.filter())},
               {"repaired", {{"nan", rep.nan_texels}, {"inf", rep.inf_texels}, {"negative", rep.negative_texels}}}};
   j["table"] = {{"top_resolution", T},
                 {"cell_resolution", F},
@@ -563,6 +559,12 @@ const RegisterCommand kTable{Command{
       sub.add_option("--rotate", a->rotate, "Rotate the map about +Z (up) by DEG degrees (default 0)")
           ->type_name("DEG");
       sub.add_option("--scale", a->scale, "Multiply the map's radiance by S >= 0 (default 1)")->type_name("S");
+      sub.add_option("--env-orientation", a->orientation,
+                     "Lat-long column direction: panorama (Blender/Cycles: +X at the centre column) or legacy "
+                     "(+X at the left edge, mirrored) (default panorama)")
+          ->type_name("O");
+      sub.add_option("--env-filter", a->filter, "Radiance look-up: bilinear or nearest (default bilinear)")
+          ->type_name("F");
       sub.add_option("--top", a->top, "Top-level resolution T, 1..256 (default 12)")->type_name("T");
       sub.add_option("--fine", a->fine, "Fine resolution N (rounded up to a multiple of T); 0 = from the map's "
                                         "texel count (default)")

@@ -1,9 +1,14 @@
 // An HDR environment map: linear RGB radiance over the sphere of directions, read from the user's
-// own image file and evaluated with bilinear filtering of its pixels.
+// own image file and evaluated with bilinear filtering of its pixels (or nearest-texel look-up).
 //
-// Conventions: +Z is up. A lat-long (equirectangular) image maps column u in [0,1) to the azimuth
-// phi = 2 pi u measured from +X towards +Y, and row v in [0,1] to the polar angle theta = pi v from
-// +Z (top row = zenith). An equal-area image is Clarberg's octahedral square (see equal_area.h).
+// Conventions: +Z is up. A lat-long (equirectangular) image maps row v in [0,1] to the polar angle
+// theta = pi v from +Z (top row = zenith), and by default (LatLongOrientation::Panorama, the convention
+// of Blender/Cycles) column u to the world direction of azimuth phi (from +X towards +Y) with
+// u = 0.5 - phi / (2 pi): +X is the image's centre column, +Y is at u = 0.25, -Y at u = 0.75. Seen
+// from inside the sphere the panorama then looks like the photograph, as in other renderers and
+// panorama viewers. LatLongOrientation::Legacy is envpis's earlier u = phi / (2 pi), which shows every
+// photograph mirrored. An equal-area image is
+// Clarberg's octahedral square (see equal_area.h); the orientation does not apply to it.
 #pragma once
 
 #include <cstddef>
@@ -24,10 +29,34 @@ enum class MapLayout {
 MapLayout parse_map_layout(const std::string& s);
 const char* to_string(MapLayout layout);
 
+/// Which way a lat-long image's columns run around +Z (see the file comment).
+enum class LatLongOrientation {
+  Panorama,  ///< u = 0.5 - phi / (2 pi): +X at u = 0.5, +Y at u = 0.25 (Blender/Cycles)
+  Legacy,    ///< u = phi / (2 pi): +X at u = 0, +Y at u = 0.25 (envpis before; mirrors photographs)
+};
+
+/// Parses "panorama" or "legacy"; throws Error otherwise.
+LatLongOrientation parse_latlong_orientation(const std::string& s);
+const char* to_string(LatLongOrientation orientation);
+
+/// How eval() reads between texel centres. Nearest gives the image's values as they are (a map with
+/// hard-edged regions, comparisons with renderers set to such a look-up), and a radiance that is
+/// constant over each texel, as the texels of an importance table built from the image are.
+enum class MapFilter {
+  Bilinear,  ///< bilinear interpolation of the four nearest texels (smooth; the default)
+  Nearest,   ///< the texel the direction falls in: piecewise constant, exactly the image's values
+};
+
+/// Parses "bilinear" or "nearest"; throws Error otherwise.
+MapFilter parse_map_filter(const std::string& s);
+const char* to_string(MapFilter filter);
+
 struct EnvironmentMapOptions {
   MapLayout layout = MapLayout::Auto;
   float scale = 1.0f;  ///< multiplies every texel (must be finite and >= 0)
-  Mat3 rotation;       ///< world = rotation * map direction (default identity)
+  Mat3 rotation;  ///< world = rotation * the direction a texel has under `orientation` (default identity)
+  LatLongOrientation orientation = LatLongOrientation::Panorama;  ///< lat-long maps only
+  MapFilter filter = MapFilter::Bilinear;
 };
 
 /// What load() had to repair. Policy: a texel channel that is NaN, infinite or negative is replaced by
@@ -67,17 +96,28 @@ class EnvironmentMap {
   /// Radiance arriving from world direction `d` (need not be normalized). Zero for an invalid d.
   Rgb eval(Vec3 d) const;
 
-  /// Radiance at map-local texture coordinates (lat-long u,v or equal-area square x,y), bilinear.
+  /// Radiance at map-local texture coordinates (lat-long u,v or equal-area square x,y), read with
+  /// filter().
   Rgb eval_texture(Point2 uv) const;
 
-  /// Direction in map space <-> world space.
-  Vec3 to_world(Vec3 map_dir) const { return rotation_ * map_dir; }
-  Vec3 to_map(Vec3 world_dir) const { return inverse_rotation_ * world_dir; }
+  /// Direction in map space <-> world space. Map space is the frame of the texture-coordinate
+  /// functions: direction_to_latlong(to_map(d)) or equal_area_sphere_to_square(to_map(d)) is where
+  /// world direction d reads the image, and to_world(latlong_to_direction(uv)) is the world direction
+  /// of (u, v). The transform is the option's rotation, and for a lat-long map in the Panorama
+  /// orientation also the mirror x -> -x (Panorama is Legacy of the mirrored direction, since
+  /// atan2(y, -x) = pi - atan2(y, x)); it is then orthogonal with determinant -1. Keeping the
+  /// orientation here gives every look-up (eval, ImportanceTable) one lat-long formula.
+  Vec3 to_world(Vec3 map_dir) const { return to_world_ * map_dir; }
+  Vec3 to_map(Vec3 world_dir) const { return to_map_ * world_dir; }
 
   int width() const { return width_; }
   int height() const { return height_; }
   MapLayout layout() const { return layout_; }
   float scale() const { return scale_; }
+  /// The orientation option (it only affects lat-long maps).
+  LatLongOrientation orientation() const { return orientation_; }
+  /// How eval() and eval_texture() read the texels.
+  MapFilter filter() const { return filter_; }
   const std::string& path() const { return path_; }
   const MapLoadReport& load_report() const { return report_; }
   /// Largest texel channel after repair and scale; 0 for an all-black map.
@@ -100,18 +140,23 @@ class EnvironmentMap {
   void finish(const EnvironmentMapOptions& options);
   Rgb bilinear_latlong(float u, float v) const;
   Rgb bilinear_equal_area(float x, float y) const;
+  Rgb nearest(float x, float y) const;
 
   int width_ = 0, height_ = 0;
   MapLayout layout_ = MapLayout::LatLong;
   float scale_ = 1.0f;
+  LatLongOrientation orientation_ = LatLongOrientation::Panorama;
+  MapFilter filter_ = MapFilter::Bilinear;
   float max_radiance_ = 0;
-  Mat3 rotation_, inverse_rotation_;
+  Mat3 to_world_, to_map_;
   std::vector<float> pixels_;  // RGB, row-major, top row first
   std::string path_;
   MapLoadReport report_;
 };
 
-/// Direction (map space, +Z up) <-> lat-long texture coordinates in [0,1]^2.
+/// Direction in map space (+Z up; see EnvironmentMap::to_map) <-> lat-long texture coordinates in
+/// [0,1]^2: u = phi / (2 pi) with phi the azimuth from +X towards +Y, v = theta / pi. The map's
+/// orientation lives in to_map / to_world, so this is the one lat-long formula for both orientations.
 Point2 direction_to_latlong(Vec3 d);
 Vec3 latlong_to_direction(Point2 uv);
 

@@ -488,6 +488,94 @@ TEST(SceneFile, ShippedScenesLoadAndRender) {
   EXPECT_GE(count, 2);
 }
 
+// scene_json(objects) with the camera's "fov": 40 replaced by `fields`.
+std::string with_camera(const std::string& objects, const std::string& fields) {
+  std::string text = scene_json(objects);
+  const std::string fov = R"("fov": 40)";
+  return text.replace(text.find(fov), fov.size(), fields);
+}
+
+// An orthographic camera's primary rays all run along the view direction, from a film of the stated
+// height (and width = height * aspect) centred on 'from'; the perspective camera's all leave 'from'.
+TEST(Camera, OrthographicRaysAreParallelAndSpanTheFilm) {
+  CameraSpec spec;
+  spec.from = {1, -5, 2};
+  spec.to = {1, 0, 2};
+  spec.projection = Projection::Orthographic;
+  spec.ortho_height = 3;
+  const int W = 60, H = 20;
+  const Camera cam(spec, W, H);
+  for (float fy : {0.0f, 7.5f, 20.0f})
+    for (float fx : {0.0f, 13.25f, 60.0f}) {
+      const Ray r = cam.generate_ray(fx, fy);
+      EXPECT_NEAR(length(r.direction - Vec3{0, 1, 0}), 0.0f, 1e-6f);
+      EXPECT_NEAR(r.origin.y, -5.0f, 1e-5f);  // on the film plane through 'from'
+    }
+  // The corners: right is +X, up is +Z; the film is 9 x 3 (aspect 3) around 'from'.
+  const Ray tl = cam.generate_ray(0, 0), br = cam.generate_ray(W, H), c = cam.generate_ray(0.5f * W, 0.5f * H);
+  EXPECT_NEAR(length(tl.origin - Vec3{1 - 4.5f, -5, 2 + 1.5f}), 0.0f, 1e-5f);
+  EXPECT_NEAR(length(br.origin - Vec3{1 + 4.5f, -5, 2 - 1.5f}), 0.0f, 1e-5f);
+  EXPECT_NEAR(length(c.origin - spec.from), 0.0f, 1e-5f);
+  // The perspective camera is unchanged: every ray from 'from', the centre one along the view.
+  spec.projection = Projection::Perspective;
+  const Camera persp(spec, W, H);
+  EXPECT_NEAR(length(persp.generate_ray(3, 17).origin - spec.from), 0.0f, 0.0f);
+  EXPECT_NEAR(length(persp.generate_ray(0.5f * W, 0.5f * H).direction - Vec3{0, 1, 0}), 0.0f, 1e-6f);
+  EXPECT_GT(dot(persp.generate_ray(0, 0).direction, Vec3{-1, 0, 0}), 0.1f);
+  // A film height must be positive and finite.
+  spec.projection = Projection::Orthographic;
+  for (float bad : {0.0f, -1.0f, std::nanf(""), INFINITY}) {
+    spec.ortho_height = bad;
+    EXPECT_THROW(Camera(spec, W, H), Error) << bad;
+  }
+}
+
+// A scene file with an orthographic camera renders finite images with every strategy, and the unit
+// sphere covers the part of the 4-unit-high film that a disc of radius 1 does.
+TEST(SceneFile, OrthographicCameraRenders) {
+  TempDir dir;
+  std::string text = with_camera(R"({"type": "sphere", "center": [0, 0, 1], "radius": 1, "material": "gold"})",
+                                 R"("type": "orthographic", "ortho_height": 4)");
+  text.replace(text.find(R"("to": [0, 0, 0.5])"), 17, R"("to": [0, 0, 1])");
+  text.replace(text.find(R"("from": [0, -8, 2])"), 18, R"("from": [0, -8, 1])");
+  const Scene s = load_scene_file(dir.write("ortho.json", text));
+  EXPECT_EQ(s.camera().projection, Projection::Orthographic);
+  EXPECT_EQ(s.camera().ortho_height, 4.0f);
+  for (Strategy st : all_strategies()) {
+    RenderOptions o;
+    o.strategy = st;
+    o.spp = 2;
+    o.width = 96;
+    o.height = 64;
+    o.oracle.resolution = 8;
+    const RenderResult r = render(s, o);
+    EXPECT_EQ(r.nonfinite_pixels, 0u) << to_string(st);
+    EXPECT_TRUE(all_finite(r)) << to_string(st);
+    if (st != Strategy::Bsdf) continue;
+    const double sphere = std::count(r.object_id.begin(), r.object_id.end(), 0);
+    const double film = 4.0 * 6.0;  // world units: 4 high, 6 wide
+    EXPECT_NEAR(sphere / r.object_id.size() * film, M_PI, 0.1);
+  }
+}
+
+// An environment file's "orientation" and "filter" fields reach the map (default: panorama, bilinear).
+TEST(SceneFile, EnvironmentOrientationAndFilterFields) {
+  const std::string sunset = std::string(kBlenderWorldDir) + "/sunset.exr";
+  if (!fs::exists(sunset)) GTEST_SKIP() << "no " << sunset;
+  TempDir dir;
+  std::string text = scene_json(R"({"type": "sphere", "center": [0, 0, 1], "radius": 1, "material": "gold"})");
+  const std::size_t sky = text.find(R"({"sky")"), sky_end = text.find('}', text.find('}', sky) + 1);
+  std::string legacy = text;
+  legacy.replace(sky, sky_end + 1 - sky, R"({"file": ")" + sunset + R"(", "orientation": "legacy", "filter": "nearest"})");
+  const Scene a = load_scene_file(dir.write("legacy.json", legacy));
+  EXPECT_EQ(a.environment().orientation(), LatLongOrientation::Legacy);
+  EXPECT_EQ(a.environment().filter(), MapFilter::Nearest);
+  text.replace(sky, sky_end + 1 - sky, R"({"file": ")" + sunset + R"("})");
+  const Scene b = load_scene_file(dir.write("default.json", text));
+  EXPECT_EQ(b.environment().orientation(), LatLongOrientation::Panorama);
+  EXPECT_EQ(b.environment().filter(), MapFilter::Bilinear);
+}
+
 std::string load_error(const std::string& text, const TempDir& dir) {
   const std::string path = dir.write("bad.json", text);
   try {
@@ -551,6 +639,18 @@ TEST(SceneFile, CleanErrorsForBadFilesAndFields) {
       {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"nope.exr\", \"x\""),
        "environment"},
       {scene_json(sphere).replace(scene_json(sphere).find("\"fov\": 40"), 9, "\"fov\": 400"), "camera.fov"},
+      {with_camera(sphere, R"("type": "fisheye")"), "camera.type: unknown camera type 'fisheye'"},
+      {with_camera(sphere, R"("type": "orthographic")"), "camera: missing field 'ortho_height'"},
+      {with_camera(sphere, R"("type": "orthographic", "ortho_height": 0)"), "camera.ortho_height: must be a positive"},
+      {with_camera(sphere, R"("type": "orthographic", "ortho_height": -2)"), "camera.ortho_height: must be a positive"},
+      {with_camera(sphere, R"("type": "orthographic", "ortho_height": 1e300)"), "camera.ortho_height: must be a positive"},
+      {with_camera(sphere, R"("type": "orthographic", "ortho_height": "big")"), "camera.ortho_height: expected a number"},
+      {with_camera(sphere, R"("type": "orthographic", "ortho_height": 2, "fov": 30)"), "camera.fov: an orthographic"},
+      {with_camera(sphere, R"("ortho_height": 2)"), "camera.ortho_height: only an orthographic camera"},
+      {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"x.exr\", \"orientation\": \"up\", \"x\""),
+       "environment.orientation: unknown lat-long orientation 'up'"},
+      {scene_json("").replace(scene_json("").find("\"sky\""), 5, "\"file\": \"x.exr\", \"filter\": \"cubic\", \"x\""),
+       "environment.filter: unknown map filter 'cubic'"},
   };
   for (const Case& c : cases) {
     const std::string err = load_error(c.text, dir);
@@ -604,6 +704,10 @@ TEST(Command, RejectsBadOptionsWithOneLineErrors) {
       {"--out " + (dir.path / "x.png").string(), "OpenEXR"},
       {"", "--out is required"},
       {"--env /nonexistent.exr --out " + out, "nonexistent.exr"},
+      {"--env-orientation legacy --out " + out, "--env-orientation needs --env"},
+      {"--env-filter nearest --out " + out, "--env-filter needs --env"},
+      {"--env x.exr --env-orientation mirrored --out " + out, "--env-orientation: unknown lat-long orientation"},
+      {"--env x.exr --env-filter cubic --out " + out, "--env-filter: unknown map filter 'cubic'"},
   };
   for (const auto& [args, expect] : cases) {
     const CommandResult r = run_envpis(args);
