@@ -1,6 +1,29 @@
 #include "render/sampler.h"
 
+#include <boost/random/sobol.hpp>
+
+#include <vector>
+
 namespace envpis::render {
+
+namespace sobol {
+
+const std::uint32_t* matrix(int dim) {
+  // Boost generates in Gray-code order: after seed(2^(k+1) - 2) the next point is the one whose Gray
+  // code is 2^k, i.e. column k of every dimension's generator matrix.
+  static const std::vector<std::uint32_t> columns = [] {
+    std::vector<std::uint32_t> c(static_cast<std::size_t>(kDimensions) * 32);
+    boost::random::sobol_engine<std::uint32_t, 32> engine(kDimensions);
+    for (int k = 0; k < 32; ++k) {
+      engine.seed(static_cast<std::uint32_t>((std::uint64_t(1) << (k + 1)) - 2));
+      for (int d = 0; d < kDimensions; ++d) c[static_cast<std::size_t>(d) * 32 + k] = engine();
+    }
+    return c;
+  }();
+  return &columns[static_cast<std::size_t>(dim) * 32];
+}
+
+}  // namespace sobol
 
 SamplerKind parse_sampler(const std::string& s) {
   if (s == "sobol") return SamplerKind::Sobol;

@@ -6,10 +6,12 @@
 // vertices consumed). Every value is a function of (kind, seed, pixel, sample index, dimension) only,
 // so a pixel's samples never depend on which thread renders it or in which order tiles run.
 //
-// Sobol: each next2d() call is one padded pair, a 2D (0,2)-sequence over the pixel's sample indices
-// (the samples 0 .. 2^m - 1 of a pixel are stratified in every elementary interval of area 2^-m);
-// each next1d() call is a scrambled, shuffled van der Corput sequence. Pairs and pixels are
-// decorrelated by their own hashed scrambles.
+// Sobol: dimension d < 64 of a pixel's sample i is dimension d of point shuffle(i) of the Sobol
+// sequence (Joe-Kuo direction numbers), Owen-scrambled per (pixel, dimension). The shuffle, one per
+// pixel, maps every aligned block of 2^m indices onto an aligned block, so the first 2^m samples of a
+// pixel are a (t,m,s)-net in all these dimensions at once: the pixel position, the light sample and
+// the BSDF sample are stratified jointly, not only pair by pair. Dimensions from 64 on (deep path
+// vertices) are padded pairs: 2D (0,2)-sequences with their own scramble and shuffle.
 #pragma once
 
 #include <cstdint>
@@ -32,17 +34,20 @@ class PixelSampler {
       : kind_(kind),
         index_(static_cast<std::uint32_t>(sample)),
         key_(mix64(mix64(mix64(seed + 0x632be59bd9b4e019ULL) ^ pixel) ^
-                   (kind == SamplerKind::Sobol ? 0 : sample * 0x9e3779b97f4a7c15ULL))) {}
+                   (kind == SamplerKind::Independent ? sample * 0x9e3779b97f4a7c15ULL : 0))),
+        shuffled_(sobol::nested_uniform_scramble(index_, static_cast<std::uint32_t>(mix64(key_ ^ 0x2545f4914f6cdd1dULL)))) {}
 
   float next1d() {
     const std::uint32_t d = dim_++;
     if (kind_ == SamplerKind::Independent) return independent(d);
+    if (d < sobol::kDimensions) return global(d);
     return sobol::sample_1d(index_, scramble(d));
   }
   Point2 next2d() {
     const std::uint32_t d = dim_;
     dim_ += 2;
     if (kind_ == SamplerKind::Independent) return {independent(d), independent(d + 1)};
+    if (d + 1 < sobol::kDimensions) return {global(d), global(d + 1)};
     Point2 p;
     sobol::sample_2d(index_, scramble(d), &p.x, &p.y);
     return p;
@@ -54,7 +59,7 @@ class PixelSampler {
   /// 64 random bits for an independent stream (e.g. per-shading-point jitter), distinct per sample
   /// with either kind.
   std::uint64_t stream(std::uint32_t dim) const {
-    const std::uint64_t per_sample = kind_ == SamplerKind::Sobol ? std::uint64_t(index_) * 0xd1b54a32d192ed03ULL : 0;
+    const std::uint64_t per_sample = kind_ != SamplerKind::Independent ? std::uint64_t(index_) * 0xd1b54a32d192ed03ULL : 0;
     return mix64(key_ ^ mix64(0xa0761d6478bd642fULL + dim) ^ per_sample);
   }
 
@@ -63,6 +68,11 @@ class PixelSampler {
   float independent(std::uint32_t dim) const {
     const std::uint64_t h = mix64(key_ + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);
     return float(h >> 40) * 0x1p-24f;
+  }
+  /// Dimension d of the pixel's shuffled point of the full Sobol sequence, Owen-scrambled.
+  float global(std::uint32_t d) const {
+    return sobol::to_unit_float(sobol::nested_uniform_scramble(sobol::sample_dim(shuffled_, static_cast<int>(d)),
+                                                               scramble(d).x));
   }
   /// The per-(seed, pixel, dimension) scrambles: the same for all samples of the pixel, as the
   /// sequence's stratification needs.
@@ -75,6 +85,7 @@ class PixelSampler {
   SamplerKind kind_;
   std::uint32_t index_;
   std::uint64_t key_;
+  std::uint32_t shuffled_;  // the sample index after the pixel's shuffle (full Sobol)
   std::uint32_t dim_ = 0;
 };
 

@@ -2,17 +2,31 @@
 // (Burley 2020, "Practical Hash-based Owen Scrambling"; the Laine-Karras style hash with the
 // constants of Vegdahl 2021).
 //
-// Only the first two Sobol dimensions are used: together they form a (0,2)-sequence in base 2, so any
-// 2^m consecutive points starting at a multiple of 2^m are a (0,m,2)-net (one point in every
-// elementary interval of area 2^-m). Higher dimensions are "padded": each pair of dimensions gets its
-// own scramble and its own shuffle of the sample index, which decorrelates the pairs while keeping
-// every pair stratified (the shuffle maps each aligned block of 2^m indices onto an aligned block of
-// 2^m indices, so prefixes of 2^m samples stay nets).
+// The full sequence serves the first kDimensions dimensions; past them, pairs are "padded": the first
+// two Sobol dimensions (a (0,2)-sequence in base 2: any aligned 2^m points are a (0,m,2)-net) with
+// their own scramble and index shuffle per pair. The shuffle maps each aligned block of 2^m indices
+// onto an aligned block of 2^m indices, so prefixes of 2^m samples stay nets.
 #pragma once
 
 #include <cstdint>
 
 namespace envpis::render::sobol {
+
+/// Dimensions of the full (not padded) Sobol sequence: Joe and Kuo's direction numbers, read from
+/// Boost.Random's sobol_engine.
+constexpr int kDimensions = 64;
+
+/// The 32 direction numbers (generator matrix columns) of dimension `dim` < kDimensions: bit k of the
+/// index contributes column k.
+const std::uint32_t* matrix(int dim);
+
+inline std::uint32_t sample_dim(std::uint32_t index, int dim) {
+  const std::uint32_t* v = matrix(dim);
+  std::uint32_t result = 0;
+  for (int k = 0; index != 0; index >>= 1, ++k)
+    if (index & 1u) result ^= v[k];
+  return result;
+}
 
 inline std::uint32_t reverse_bits(std::uint32_t x) {
   x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
@@ -39,18 +53,6 @@ inline std::uint32_t nested_uniform_scramble(std::uint32_t x, std::uint32_t seed
   return reverse_bits(laine_karras_permutation(reverse_bits(x), seed));
 }
 
-/// Sobol dimension 0 (the van der Corput sequence) of point `index`, as 32-bit fixed point.
-inline std::uint32_t sobol_dim0(std::uint32_t index) { return reverse_bits(index); }
-
-/// Sobol dimension 1 of point `index`: all its direction numbers m_k are 1, so the generator matrix is
-/// Pascal's triangle mod 2 and each column is the previous one xor itself shifted right by one.
-inline std::uint32_t sobol_dim1(std::uint32_t index) {
-  std::uint32_t result = 0;
-  for (std::uint32_t v = 1u << 31; index != 0; index >>= 1, v ^= v >> 1)
-    if (index & 1u) result ^= v;
-  return result;
-}
-
 /// 24 high bits as a float in [0, 1) (never rounds up to 1).
 inline float to_unit_float(std::uint32_t x) { return float(x >> 8) * 0x1p-24f; }
 
@@ -61,13 +63,13 @@ struct Scramble {
 
 inline float sample_1d(std::uint32_t index, const Scramble& s) {
   const std::uint32_t i = nested_uniform_scramble(index, s.shuffle);
-  return to_unit_float(nested_uniform_scramble(sobol_dim0(i), s.x));
+  return to_unit_float(nested_uniform_scramble(sample_dim(i, 0), s.x));
 }
 
 inline void sample_2d(std::uint32_t index, const Scramble& s, float* u, float* v) {
   const std::uint32_t i = nested_uniform_scramble(index, s.shuffle);
-  *u = to_unit_float(nested_uniform_scramble(sobol_dim0(i), s.x));
-  *v = to_unit_float(nested_uniform_scramble(sobol_dim1(i), s.y));
+  *u = to_unit_float(nested_uniform_scramble(sample_dim(i, 0), s.x));
+  *v = to_unit_float(nested_uniform_scramble(sample_dim(i, 1), s.y));
 }
 
 }  // namespace envpis::render::sobol

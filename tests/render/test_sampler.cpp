@@ -15,19 +15,27 @@
 namespace envpis::render {
 namespace {
 
-TEST(Sobol, FirstTwoDimensionsMatchBoostAsPointSets) {
+TEST(Sobol, MatricesReproduceBoostsSequence) {
   // Boost generates in Gray-code order and skips the origin; the first 2^m - 1 of its points plus the
-  // origin are the first 2^m points in natural order.
+  // origin are the first 2^m points in natural order. All kDimensions dimensions at once.
+  const int D = sobol::kDimensions;
   for (int m : {4, 8, 12}) {
-    boost::random::sobol_engine<std::uint32_t, 32> boost_gen(2);
-    std::set<std::pair<std::uint32_t, std::uint32_t>> theirs{{0u, 0u}}, ours;
+    boost::random::sobol_engine<std::uint32_t, 32> boost_gen(D);
+    std::set<std::vector<std::uint32_t>> theirs{std::vector<std::uint32_t>(D, 0u)}, ours;
     for (std::uint32_t i = 0; i + 1 < (1u << m); ++i) {
-      const std::uint32_t x = boost_gen(), y = boost_gen();
-      theirs.insert({x, y});
+      std::vector<std::uint32_t> p(D);
+      for (auto& x : p) x = boost_gen();
+      theirs.insert(p);
     }
-    for (std::uint32_t i = 0; i < (1u << m); ++i) ours.insert({sobol::sobol_dim0(i), sobol::sobol_dim1(i)});
+    for (std::uint32_t i = 0; i < (1u << m); ++i) {
+      std::vector<std::uint32_t> p(D);
+      for (int d = 0; d < D; ++d) p[d] = sobol::sample_dim(i, d);
+      ours.insert(p);
+    }
     EXPECT_EQ(ours, theirs) << "m = " << m;
   }
+  // Dimension 0 is van der Corput.
+  for (std::uint32_t i = 0; i < 1000; ++i) EXPECT_EQ(sobol::sample_dim(i, 0), sobol::reverse_bits(i));
 }
 
 TEST(Sobol, ScrambleAndShuffleAreBijectionsThatKeepBlocks) {
@@ -45,39 +53,79 @@ TEST(Sobol, ScrambleAndShuffleAreBijectionsThatKeepBlocks) {
   }
 }
 
-// Every elementary interval 2^-a x 2^-(m-a) holds exactly one of the points.
-bool is_net(const std::vector<Point2>& pts, int m) {
-  for (int a = 0; a <= m; ++a) {
-    const int nx = 1 << a, ny = 1 << (m - a);
+// A (t,m,2)-net: every elementary interval 2^-a x 2^-(m-t-a) holds exactly 2^t of the points.
+bool is_net(const std::vector<Point2>& pts, int m, int t = 0) {
+  for (int a = 0; a <= m - t; ++a) {
+    const int nx = 1 << a, ny = 1 << (m - t - a);
     std::vector<int> count(static_cast<std::size_t>(nx) * ny, 0);
     for (const Point2& p : pts) {
       const int x = std::min(nx - 1, static_cast<int>(p.x * nx)), y = std::min(ny - 1, static_cast<int>(p.y * ny));
-      if (++count[static_cast<std::size_t>(y) * nx + x] > 1) return false;
+      if (++count[static_cast<std::size_t>(y) * nx + x] > (1 << t)) return false;
     }
   }
   return true;
 }
 
+// The smallest t for which the 2^m points are a (t,m,2)-net.
+int net_quality(const std::vector<Point2>& pts, int m) {
+  int t = 0;
+  while (t < m && !is_net(pts, m, t)) ++t;
+  return t;
+}
+
+std::vector<Point2> pixel_points(std::uint64_t seed, std::uint64_t pixel, std::uint32_t dim, std::uint32_t first,
+                                 std::uint32_t count) {
+  std::vector<Point2> pts;
+  for (std::uint32_t i = first; i < first + count; ++i) {
+    PixelSampler s(SamplerKind::Sobol, seed, pixel, i);
+    s.set_dimension(dim);
+    pts.push_back(s.next2d());
+  }
+  return pts;
+}
+
 TEST(PixelSampler, SobolPairsAreNetsForEveryPrefixAndBlock) {
-  // Pairs at the dimensions the integrator uses (pixel, light, BSDF at several vertices), several
-  // seeds and pixels: samples [k 2^m, (k+1) 2^m) of a pixel are a (0,m,2)-net.
-  for (std::uint64_t seed : {0ull, 7ull}) {
-    for (std::uint64_t pixel : {0ull, 1234ull}) {
-      for (std::uint32_t dim : {0u, 2u, 4u, 10u, 12u, 58u}) {
-        for (int m = 0; m <= 10; ++m) {
-          for (std::uint32_t k : {0u, 1u, 5u}) {
-            std::vector<Point2> pts;
-            for (std::uint32_t i = k << m; i < (k + 1) << m; ++i) {
-              PixelSampler s(SamplerKind::Sobol, seed, pixel, i);
-              s.set_dimension(dim);
-              pts.push_back(s.next2d());
-            }
-            ASSERT_TRUE(is_net(pts, m)) << "seed " << seed << " pixel " << pixel << " dim " << dim << " m " << m
-                                        << " block " << k;
-          }
-        }
+  // Samples [k 2^m, (k+1) 2^m) of a pixel, several seeds and pixels: the pixel position (dimensions
+  // 0, 1) and the padded pairs past the full sequence's dimensions are (0,m,2)-nets; the leading pairs
+  // the integrator uses for the light and BSDF samples of the first vertices are (t,m,2)-nets with the
+  // t of Joe and Kuo's numbers (scrambling and the block shuffle preserve it).
+  for (std::uint32_t dim : {0u, 2u, 4u, 10u, 12u, 64u, 66u, 80u}) {
+    for (int m = 0; m <= 10; ++m) {
+      int t = 0;  // padded pairs: (0,2)-sequences
+      if (dim < sobol::kDimensions) {
+        std::vector<Point2> plain;
+        for (std::uint32_t i = 0; i < (1u << m); ++i)
+          plain.push_back({sobol::to_unit_float(sobol::sample_dim(i, int(dim))),
+                           sobol::to_unit_float(sobol::sample_dim(i, int(dim) + 1))});
+        t = net_quality(plain, m);
       }
+      if (dim < 6) EXPECT_LE(t, 3) << "dim " << dim << " m " << m;  // vertex 0: light and BSDF pairs
+      for (std::uint64_t seed : {0ull, 7ull})
+        for (std::uint64_t pixel : {0ull, 1234ull})
+          for (std::uint32_t k : {0u, 1u, 5u}) {
+            const std::vector<Point2> pts = pixel_points(seed, pixel, dim, k << m, 1u << m);
+            ASSERT_TRUE(is_net(pts, m, t)) << "seed " << seed << " pixel " << pixel << " dim " << dim << " m " << m
+                                           << " block " << k;
+          }
     }
+  }
+}
+
+TEST(PixelSampler, SobolIsStratifiedAcrossPairs) {
+  // What padding alone cannot give: the pixel position and the light sample are stratified jointly.
+  // Dimensions 0 and 2 (pixel x, light u) of 2^m samples are a net, as in the unscrambled sequence.
+  for (int m = 2; m <= 10; ++m) {
+    std::vector<Point2> pts;
+    for (std::uint32_t i = 0; i < (1u << m); ++i) {
+      PixelSampler s(SamplerKind::Sobol, 3, 5, i);
+      const Point2 pixel = s.next2d(), light = s.next2d();
+      pts.push_back({pixel.x, light.x});
+    }
+    std::vector<Point2> plain;
+    for (std::uint32_t i = 0; i < (1u << m); ++i)
+      plain.push_back({sobol::to_unit_float(sobol::sample_dim(i, 0)), sobol::to_unit_float(sobol::sample_dim(i, 2))});
+    EXPECT_TRUE(is_net(pts, m, net_quality(plain, m))) << "m " << m;
+    EXPECT_LE(net_quality(plain, m), 1) << "m " << m;
   }
 }
 
