@@ -1,5 +1,6 @@
 #include "envpis/product_sampler.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -13,6 +14,7 @@ namespace envpis {
 ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSamplerOptions& options)
     : table_(&table), options_(options) {
   if (!(options.env_mix >= 0.0f && options.env_mix <= 1.0f)) throw Error("env_mix must be in [0, 1]");
+  if (!(options.env_floor >= 0.0f && options.env_floor <= 1.0f)) throw Error("env_floor must be in [0, 1]");
   kernels_ = options.simd ? &detail::kernels_best() : &detail::kernels_scalar();
   prob_.assign(table.padded_cell_count(), 0.0f);
   row_sum_.assign(table.top_resolution(), 0.0f);
@@ -40,6 +42,13 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   if (!(sum >= std::numeric_limits<float>::min()) || !std::isfinite(sum)) {
     fallback_ = true;
     m = 1.0f;
+  }
+  if (!fallback_ && options_.env_floor > 0.0f) {  // the environment floor (see product_sampler.h)
+    const float* e = table_->soa_prob();
+    const float a = 1.0f / sum, r = options_.env_floor;
+    for (int c = 0; c < cells; ++c)
+      if (prob[c] > 0.0f) prob[c] = std::max(prob[c] * a, r * e[c]);
+    sum = row_sums();
   }
   if (m > 0.0f) {  // defensive mixture with the environment distribution
     const float* e = table_->soa_prob();

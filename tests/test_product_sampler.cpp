@@ -151,9 +151,10 @@ TEST(ProductSampler, SamplePdfEqualsPdfOfDirectionAndIntegratesToOne) {
 TEST(ProductSampler, SimdWeightsEqualScalarReference) {
   const auto tables = test_tables();
   for (const auto& [name, table] : tables) {
-    ProductSamplerOptions scalar_opt;
+    ProductSamplerOptions simd_opt, scalar_opt;  // the paper's top level: the kernels' weights as they are
+    simd_opt.env_floor = scalar_opt.env_floor = 0;
     scalar_opt.simd = false;
-    ProductSampler simd(*table), scalar(*table, scalar_opt);
+    ProductSampler simd(*table, simd_opt), scalar(*table, scalar_opt);
     for (const Config& c : random_configs(40, 3)) {
       ASSERT_TRUE(simd.prepare(c.n, c.wo, c.proxy));
       ASSERT_TRUE(scalar.prepare(c.n, c.wo, c.proxy));
@@ -377,4 +378,31 @@ TEST(ProductSampler, EnvironmentMixtureAndOptions) {
   EXPECT_TRUE(r.passed) << r.message;
   o.env_mix = 1.5f;
   EXPECT_THROW(ProductSampler(table, o), Error);
+}
+
+TEST(ProductSampler, EnvironmentFloorBoundsTheDensityByTheEnvironments) {
+  // The documented guarantee: wherever the product samples (pdf > 0), its density is at least
+  // r / (1 + r) of the environment table's, over random shading points and every test map. Without the
+  // floor (r = 0) glossy proxies break it by far, so the test can tell.
+  for (const auto& [name, table] : test_tables()) {
+    for (float r : {ProductSamplerOptions{}.env_floor, 0.0f}) {
+      ProductSamplerOptions o;
+      o.env_floor = r;
+      ProductSampler ps(*table, o);
+      std::mt19937_64 rng(21);
+      double worst = HUGE_VAL;
+      for (const Config& c : random_configs(60, 17)) {
+        if (!ps.prepare(c.n, c.wo, c.proxy)) continue;
+        for (int i = 0; i < 400; ++i) {
+          const Vec3 d = random_direction(rng);
+          const float p = ps.pdf(d), e = table->pdf(d);
+          if (p > 0 && e > 0) worst = std::min(worst, double(p) / e);
+        }
+      }
+      if (r > 0)
+        EXPECT_GE(worst, r / (1 + r) * (1 - 1e-4)) << name;
+      else
+        EXPECT_LT(worst, 0.5 * ProductSamplerOptions{}.env_floor) << name;
+    }
+  }
 }

@@ -637,7 +637,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
     key["closed_surfaces"] = false;
   if (ref_strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
-                      base.product.proxy.max_alpha, base.product.env_mix};
+                      base.product.proxy.max_alpha, base.product.env_mix, base.product.env_floor};
   const std::string cache_dir = a.no_cache ? "" : (a.cache_dir.empty() ? default_cache_dir() : a.cache_dir);
   std::optional<Reference> ref_opt;
   if (!cache_dir.empty()) ref_opt = load_cached_reference(cache_dir, key);
@@ -883,7 +883,8 @@ void run(const CompareArgs& a, const std::string& command_line) {
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
-                          {"env_mix", base.product.env_mix}};
+                          {"env_mix", base.product.env_mix},
+                          {"env_floor", base.product.env_floor}};
   if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
   j["top_resolution"] = base.top_resolution;

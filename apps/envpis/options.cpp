@@ -115,6 +115,10 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--proxy-max-alpha", proxy_max_alpha,
                  "product: cap on the transformed proxy roughness, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
+  sub.add_option("--env-floor", env_floor,
+                 "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
+                 "(default: the library's)")
+      ->type_name("R");
   sub.add_option("--env-mix", env_mix,
                  "product: fraction of environment-only sampling mixed in, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
@@ -153,6 +157,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!proxy_max_alpha.empty())
     o.product.proxy.max_alpha = static_cast<float>(parse_number_in("--proxy-max-alpha", proxy_max_alpha, 0, 1, "in [0, 1]"));
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
+  if (!env_floor.empty())
+    o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
 }
 
 int SceneOptionArgs::closed_surfaces_override() const {

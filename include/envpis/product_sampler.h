@@ -10,6 +10,14 @@
 //     p(w) = (P[c] / sum P) * q_c(w)
 // with q_c the fine density of the cell; pdf(w) returns exactly that, for MIS with BSDF sampling.
 //
+// Environment floor (default r = 1/8): every cell the proxy sees (P[c] > 0) keeps at least r times its
+// environment share, P'[c] = max(P[c] / sum P, r E[c]), renormalized (which divides by at most 1 + r).
+// So wherever the product samples at all, its density is at least r / (1 + r) of the environment
+// table's: a light sample weighs at most (1 + r) / r = 9 times what the same sample weighs under mis,
+// and a BSDF sample's power-heuristic contribution, at most f L / (2 p_light), likewise. A bright sun
+// in a cell the proxy under-rates cannot make product a firefly that mis would not be, within that
+// factor. Cells the proxy does not see (entirely below an opaque surface's horizon) stay at 0.
+//
 // Optionally a fraction env_mix of the environment-only distribution is mixed into the top level
 // (P'[c] = (1 - m) P[c] / sum P + m E[c]), a defensive mixture against cells the proxy under-rates.
 //
@@ -31,6 +39,9 @@ namespace envpis {
 struct ProductSamplerOptions {
   ProxyOptions proxy;
   float env_mix = 0.0f;  ///< fraction of the environment-only distribution mixed in, [0, 1]
+  /// r: every cell the proxy sees keeps at least r times its environment share (see above), [0, 1];
+  /// 0 is the paper's top level.
+  float env_floor = 0.125f;
   bool simd = true;      ///< false: the scalar reference kernel (for tests and benchmarks)
 };
 
