@@ -8,7 +8,9 @@
 # Sizes are modest so the whole table runs in about 16 minutes on 2 free cores (build not included):
 # 384x64 pixels, 32 spp, reference mis at 4096 spp with another seed (cached under ~/.cache/envpis),
 # the oracle at the renderer's defaults (64x64 cells x 4 BSDF evaluations; it is ~80% of the time).
-# Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD (REBUILD=0: use BUILD as is).
+# Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD (REBUILD=0: use BUILD as is),
+# STRATEGIES (default mis,mis-comp,product,oracle), SEEDS (renders per strategy; relMSE is their
+# median, default 1) and SAMPLER (sobol or independent; default: the renderer's, sobol).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -19,6 +21,9 @@ WIDTH=${WIDTH:-384}
 HEIGHT=${HEIGHT:-64}
 ORACLE_RES=${ORACLE_RES:-64}
 MAPS=${MAPS:-/usr/share/blender/datafiles/studiolights/world/*.exr}
+STRATEGIES=${STRATEGIES:-mis,mis-comp,product,oracle}
+SEEDS=${SEEDS:-1}
+SAMPLER=${SAMPLER:-sobol}
 if [ ! -x "$BUILD/apps/envpis/envpis" ] || [ "${REBUILD:-1}" = 1 ]; then
   cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DENVPIS_BUILD_BENCH=OFF >/dev/null
   cmake --build "$BUILD" -j"$(nproc)" --target envpis_cmd
@@ -31,7 +36,7 @@ for map in $MAPS; do
   name=$(basename "$map" .exr)
   echo "paper-table: $name"
   "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$map" --integrator direct \
-    --strategies mis,mis-comp,product,oracle --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
+    --strategies "$STRATEGIES" --seeds "$SEEDS" --sampler "$SAMPLER" --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
     --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 4 --no-convergence \
     --quiet --out "$OUT/$name" | sed 's/^/  /'
 done

@@ -134,6 +134,7 @@ def main(paths):
     out = []
     et = m0.get("equal_time") or {}
     out.append(f"Scene fig1 at {m0['width']}x{m0['height']}, {m0['integrator']} lighting, {m0['heuristic']} heuristic, "
+               f"{m0.get('sampler', 'independent')} sampler, relMSE the median over {len(m0.get('seeds', [0]))} seed(s), "
                f"{m0['threads']} threads; equal spp = {m0['equal_spp']['spp']} spp; equal time = each strategy gets "
                f"the seconds mis took at {m0['equal_spp']['spp']} spp; reference: {m0['reference']['strategy']} at "
                f"{m0['reference']['spp']} spp with another seed (its own noise adds ~{f(100 * geomean([m['reference']['relmse_floor'] / r['relmse'] for _, m in runs for r in m['equal_spp']['strategies'] if r['strategy'] == 'mis']), 1)}% "
