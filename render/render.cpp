@@ -37,18 +37,22 @@ void validate(const RenderOptions& o) {
   if (o.max_depth > 1024) throw Error("max depth must be at most 1024");
   if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
-  if (o.top_resolution < 1 || o.top_resolution > 256)
-    throw Error("top resolution must be in 1..256, got " + std::to_string(o.top_resolution));
-  if (!(o.peak_ratio == 0 || (o.peak_ratio >= 1 && o.peak_ratio <= 1e6f)))
+  const ImportanceTableOptions& lt = o.light_table;
+  if (lt.top_resolution < 1 || lt.top_resolution > 256)
+    throw Error("top resolution must be in 1..256, got " + std::to_string(lt.top_resolution));
+  if (lt.fine_resolution < 0 || lt.fine_resolution > 16384) throw Error("fine resolution must be in 0..16384");
+  if (!(lt.peak_ratio == 0 || (lt.peak_ratio >= 1 && lt.peak_ratio <= 1e6f)))
     throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
-  if (o.tables && o.tables->table && o.tables->peak_ratio != o.peak_ratio)
-    throw Error("prebuilt tables have another peak ratio");
+  if (o.tables && o.tables->table &&
+      (o.tables->light_table.peak_ratio != lt.peak_ratio || o.tables->light_table.fine_resolution != lt.fine_resolution))
+    throw Error("prebuilt tables have other light table options");
   if (o.tables && o.tables->strategy != o.strategy)
     throw Error(std::string("prebuilt tables are for strategy ") + to_string(o.tables->strategy) + ", not " +
                 to_string(o.strategy));
-  if (o.tables && o.tables->table && o.strategy != Strategy::Oracle && o.tables->top_resolution != o.top_resolution)
-    throw Error("prebuilt tables have top resolution " + std::to_string(o.tables->top_resolution) + ", not " +
-                std::to_string(o.top_resolution));
+  if (o.tables && o.tables->table && o.strategy != Strategy::Oracle &&
+      o.tables->light_table.top_resolution != lt.top_resolution)
+    throw Error("prebuilt tables have top resolution " + std::to_string(o.tables->light_table.top_resolution) +
+                ", not " + std::to_string(lt.top_resolution));
 }
 
 RenderResult render(const Scene& scene, const RenderOptions& options) {
@@ -76,7 +80,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const StrategyTables* tables = options.tables;
   if (!tables) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
-                                options.top_resolution, options.peak_ratio);
+                                options.light_table);
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }

@@ -45,11 +45,9 @@ struct RenderOptions {
   int tile_size = 16;
   OracleOptions oracle;
   ProductSamplerOptions product;
-  /// Top-level cells per side of the light table (env, mis, mis-comp, product): 1..256, the paper's 12.
-  int top_resolution = ImportanceTableOptions{}.top_resolution;
-  /// Light tables: each texel's importance is at least 1/peak_ratio of the radiance eval reaches in it
-  /// (ImportanceTableOptions::peak_ratio); 0 turns the bound off.
-  float peak_ratio = ImportanceTableOptions{}.peak_ratio;
+  /// The light tables (env, mis, mis-comp, product; see StrategyTables::light_table): top resolution
+  /// 1..256 (the paper's 12), fine resolution (0: from the map), the peak bound (0: off).
+  ImportanceTableOptions light_table;
   /// Prebuilt tables for this strategy and the scene's environment (e.g. shared between renders);
   /// null: render() builds them (their time is reported in setup_seconds, not seconds).
   const StrategyTables* tables = nullptr;

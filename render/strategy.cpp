@@ -40,7 +40,7 @@ Heuristic parse_heuristic(const std::string& s) {
 const char* to_string(Heuristic h) { return h == Heuristic::Power ? "power" : "balance"; }
 
 StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
-                                     const ProductSamplerOptions& product, int top_resolution, float peak_ratio) {
+                                     const ProductSamplerOptions& product, const ImportanceTableOptions& light_table) {
   const auto t0 = std::chrono::steady_clock::now();
   StrategyTables t;
   t.strategy = strategy;
@@ -54,13 +54,11 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
       throw Error("oracle directions per cell must be a square number in 1..256, got " +
                   std::to_string(oracle.directions));
   }
-  if (top_resolution < 1 || top_resolution > 256)
-    throw Error("light table top resolution must be in 1..256, got " + std::to_string(top_resolution));
-  t.top_resolution = top_resolution;
-  t.peak_ratio = peak_ratio;
-  ImportanceTableOptions opt;
-  opt.top_resolution = top_resolution;
-  opt.peak_ratio = peak_ratio;
+  if (light_table.top_resolution < 1 || light_table.top_resolution > 256)
+    throw Error("light table top resolution must be in 1..256, got " + std::to_string(light_table.top_resolution));
+  t.light_table = light_table;
+  t.light_table.compensated = false;
+  ImportanceTableOptions opt = t.light_table;
   switch (strategy) {
     case Strategy::Bsdf: break;
     case Strategy::Env:

@@ -52,17 +52,14 @@ struct StrategyTables {
   ProductSamplerOptions product;
   double build_seconds = 0;
 
-  /// Top-level cells per side of the light table of env, mis, mis-comp and product (the oracle's is
-  /// oracle.resolution).
-  int top_resolution = ImportanceTableOptions{}.top_resolution;
-  /// The light tables' peak bound (ImportanceTableOptions::peak_ratio; the oracle's table too).
-  float peak_ratio = ImportanceTableOptions{}.peak_ratio;
+  /// The options of the light table of env, mis, mis-comp and product (the oracle's table takes its
+  /// peak ratio and fine resolution, and oracle.resolution as its top level; mis-comp sets compensated).
+  ImportanceTableOptions light_table;
 
-  /// Throws Error for invalid options (top_resolution and oracle.resolution: 1..256).
+  /// Throws Error for invalid options (top resolutions 1..256, see ImportanceTable for the rest).
   static StrategyTables build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle = {},
                               const ProductSamplerOptions& product = {},
-                              int top_resolution = ImportanceTableOptions{}.top_resolution,
-                              float peak_ratio = ImportanceTableOptions{}.peak_ratio);
+                              const ImportanceTableOptions& light_table = {});
 };
 
 /// The shading point a light sampler prepares for.

@@ -53,12 +53,18 @@ class RowMaxTree {
 // The outline of a texel: its corners and edge midpoints, going round.
 constexpr int kOutline = 8;
 
-// Texel range [lo, hi] whose bilinear footprints can reach pixel coordinates [a, b]: the margin covers
-// the outline's curvature between its sample points.
-void footprint(float a, float b, int& lo, int& hi) {
+// Texel range [lo, hi] that eval can read at pixel coordinates [a, b] (texel centres at integers): a
+// bilinear look-up reads the texels either side, a nearest one the closest. The margin covers the
+// outline's curvature between its sample points.
+void footprint(float a, float b, bool nearest, int& lo, int& hi) {
   const float margin = 0.05f + 0.25f * (b - a);
-  lo = static_cast<int>(std::floor(a - margin));
-  hi = static_cast<int>(std::floor(b + margin)) + 1;
+  if (nearest) {
+    lo = static_cast<int>(std::floor(a - margin + 0.5f));
+    hi = static_cast<int>(std::floor(b + margin + 0.5f));
+  } else {
+    lo = static_cast<int>(std::floor(a - margin));
+    hi = static_cast<int>(std::floor(b + margin)) + 1;
+  }
 }
 
 // Whether the outline's azimuths (in turns, [0, 1)) wind once around a pole: the texel contains it.
@@ -97,6 +103,7 @@ void map_line(const EnvironmentMap& map, bool latlong, float y, int count, float
 std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
   const int w = map.width(), h = map.height();
   const bool latlong = map.layout() != MapLayout::EqualArea;
+  const bool nearest = map.filter() == MapFilter::Nearest;
   const RowMaxTree tree(lum, w, h);
   const float map_max = *std::max_element(lum.begin(), lum.end());
   // An outline point this close to a lat-long pole (a thousandth of a texel side) has no usable azimuth.
@@ -144,8 +151,8 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
           if (north) vmin = 0;
           if (south) vmax = 1;
           int c0, c1, r0, r1;
-          footprint(umin * w - 0.5f, umax * w - 0.5f, c0, c1);
-          footprint(vmin * h - 0.5f, vmax * h - 0.5f, r0, r1);
+          footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, c0, c1);
+          footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, r0, r1);
           if (north || south) c0 = 0, c1 = w - 1;
           r0 = std::max(r0, 0);
           r1 = std::min(r1, h - 1);
@@ -155,8 +162,8 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
           peak = map_max;  // the outline crosses the map square's folded edge (rotated maps only)
         } else {
           int c0, c1, r0, r1;
-          footprint(umin * w - 0.5f, umax * w - 0.5f, c0, c1);
-          footprint(vmin * h - 0.5f, vmax * h - 0.5f, r0, r1);
+          footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, c0, c1);
+          footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, r0, r1);
           peak = 0;
           for (int r = r0; r <= r1; ++r)
             for (int c = c0; c <= c1; ++c) {  // past the square's edge, the texels eval's look-up reads

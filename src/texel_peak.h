@@ -1,4 +1,4 @@
-// Internal: an upper bound of what the map's reconstruction (EnvironmentMap::eval, bilinear) returns
+// Internal: an upper bound of what the map's reconstruction (EnvironmentMap::eval, bilinear or nearest) returns
 // inside each texel of an N x N grid over the world's equal-area square.
 //
 // Why: the table's importance is an average over each texel, and a small bright source (a sun) whose

@@ -50,7 +50,8 @@ inline std::vector<StressMap> stress_family() {
 
 /// A w x h lat-long sky (a smooth gradient, brighter at the zenith) with the suns, each texel the
 /// average over 4 x 4 points so that sub-texel suns keep their energy.
-inline EnvironmentMap make_stress_map(const StressMap& m, int w = 1024, int h = 512) {
+inline EnvironmentMap make_stress_map(const StressMap& m, int w = 1024, int h = 512,
+                                      const EnvironmentMapOptions& options = {}) {
   std::vector<float> rgb(static_cast<std::size_t>(w) * h * 3);
   std::vector<float> cos_r;
   for (const Sun& s : m.suns) cos_r.push_back(std::cos(s.radius_degrees * kPi / 180));
@@ -67,7 +68,7 @@ inline EnvironmentMap make_stress_map(const StressMap& m, int w = 1024, int h = 
         }
       for (int c = 0; c < 3; ++c) rgb[(static_cast<std::size_t>(y) * w + x) * 3 + c] = static_cast<float>(acc / 16);
     }
-  return EnvironmentMap::from_pixels(w, h, std::move(rgb));
+  return EnvironmentMap::from_pixels(w, h, std::move(rgb), options);
 }
 
 }  // namespace envpis::test

@@ -175,6 +175,8 @@ TEST_F(CliTable, BadOptions) {
   expect_errors({
       {"--top 0" + env, "--top: must be in 1..256, got '0'"},
       {"--top 12x" + env, "--top: expected an integer"},
+      {"--peak-ratio 0.5" + env, "--peak-ratio: must be 0 (off) or in [1, 1e6]"},
+      {"--peak-ratio -1" + env, "--peak-ratio"},
       {"--normal 0,0,0" + env, "--normal: the vector must be non-zero"},
       {"--normal 1,2" + env, "--normal: expected three comma-separated"},
       {"--normal nan,0,1" + env, "--normal: expected three comma-separated finite numbers"},

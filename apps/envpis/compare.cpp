@@ -587,7 +587,7 @@ void run(const CompareArgs& a, const std::string& command_line) {
     auto it = tables.find(s);
     if (it == tables.end())
       it = tables.emplace(s, StrategyTables::build(scene.environment(), s, base.oracle, base.product,
-                                                   base.top_resolution, base.peak_ratio)).first;
+                                                   base.light_table)).first;
     return it->second;
   };
   // A progress bar on a terminal for renders that take a while (the reference, the oracle).
@@ -631,8 +631,11 @@ void run(const CompareArgs& a, const std::string& command_line) {
   key["spp"] = ref_spp;
   key["seed"] = ref_seed;
   if (ref_strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
-  if (ref_strategy != Strategy::Bsdf && ref_strategy != Strategy::Oracle) key["top"] = base.top_resolution;
-  if (ref_strategy != Strategy::Bsdf) key["peak_ratio"] = base.peak_ratio;
+  if (ref_strategy != Strategy::Bsdf && ref_strategy != Strategy::Oracle) key["top"] = base.light_table.top_resolution;
+  if (ref_strategy != Strategy::Bsdf) {
+    key["peak_ratio"] = base.light_table.peak_ratio;
+    key["fine"] = base.light_table.fine_resolution;
+  }
   if ((ref_strategy == Strategy::Product || ref_strategy == Strategy::Oracle) && !scene.proxy_closed_surfaces())
     key["closed_surfaces"] = false;
   if (ref_strategy == Strategy::Product)
@@ -887,8 +890,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
                           {"env_floor", base.product.env_floor}};
   if (!a.common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = a.common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
-  j["top_resolution"] = base.top_resolution;
-  j["peak_ratio"] = base.peak_ratio;
+  j["top_resolution"] = base.light_table.top_resolution;
+  j["fine_resolution"] = base.light_table.fine_resolution;
+  j["peak_ratio"] = base.light_table.peak_ratio;
   j["closed_surfaces"] = scene.proxy_closed_surfaces();
   if (!a.common.env.empty())
     j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", a.common.env_rotation)},

@@ -95,6 +95,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--top", top, "light table: top-level cells per side (env, mis, mis-comp, product), 1..256")
       ->type_name("INT")
       ->capture_default_str();
+  sub.add_option("--fine", fine,
+                 "light tables: fine texels per side, rounded up to a multiple of --top (0: the smallest with at "
+                 "least the map's texel count)")
+      ->type_name("N")
+      ->capture_default_str();
   sub.add_option("--peak-ratio", peak_ratio,
                  "light tables: each texel's importance is at least 1/K of the radiance eval reaches in it "
                  "(K; 0: off; default: the library's)")
@@ -135,10 +140,12 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   }
   o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
   o.threads = static_cast<int>(parse_integer("--threads", threads, 0, 4096));
-  o.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
+  o.light_table.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
+  o.light_table.fine_resolution = static_cast<int>(parse_integer("--fine", fine, 0, 16384));
   if (!peak_ratio.empty()) {
-    o.peak_ratio = static_cast<float>(parse_number_in("--peak-ratio", peak_ratio, 0, 1e6, "0 (off) or in [1, 1e6]"));
-    if (o.peak_ratio > 0 && o.peak_ratio < 1) throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + peak_ratio + "'");
+    float& k = o.light_table.peak_ratio;
+    k = static_cast<float>(parse_number_in("--peak-ratio", peak_ratio, 0, 1e6, "0 (off) or in [1, 1e6]"));
+    if (k > 0 && k < 1) throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + peak_ratio + "'");
   }
   o.oracle.resolution = static_cast<int>(parse_integer("--oracle-res", oracle_res, 1, 256));
   o.oracle.directions = static_cast<int>(parse_integer("--oracle-dirs", oracle_dirs, 1, 256));

@@ -46,7 +46,7 @@ struct TableArgs {
   std::string layout = "auto";
   std::string rotate = "0", scale = "1";
   std::string orientation = "panorama", filter = "bilinear";
-  std::string top = "12", fine = "0";
+  std::string top = "12", fine = "0", peak_ratio = "8";
   std::string normal = "0,0,1", wo = "1,0,1";
   std::string proxy;  // empty: reflection=1, alpha_r=0.2
   std::string transform, min_alpha, max_alpha, env_mix = "0";
@@ -344,6 +344,9 @@ void run_table(const TableArgs& a) {
   ImportanceTableOptions table_options;
   table_options.top_resolution = int(parse_integer("--top", a.top, 1, 256));
   table_options.fine_resolution = int(parse_integer("--fine", a.fine, 0, 16384));
+  table_options.peak_ratio = float(parse_number_in("--peak-ratio", a.peak_ratio, 0, 1e6, "0 (off) or in [1, 1e6]"));
+  if (table_options.peak_ratio > 0 && table_options.peak_ratio < 1)
+    throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + a.peak_ratio + "'");
   const Vec3 normal = parse_vec3("--normal", a.normal);
   const Vec3 wo = parse_vec3("--wo", a.wo);
   const BsdfProxy proxy = parse_proxy(a.proxy);
@@ -509,7 +512,8 @@ void run_table(const TableArgs& a) {
                 {"bytes_used", bytes},
                 {"single_level_bytes", single},
                 {"memory_ratio", double(bytes) / double(single)},
-                {"integral", table.integral()}};
+                {"integral", table.integral()},
+                {"peak_ratio", table_options.peak_ratio}};
   j["shading_point"] = {
       {"normal", vec_json(normal)},
       {"wo", vec_json(wo)},
@@ -569,6 +573,10 @@ const RegisterCommand kTable{Command{
       sub.add_option("--fine", a->fine, "Fine resolution N (rounded up to a multiple of T); 0 = from the map's "
                                         "texel count (default)")
           ->type_name("N");
+      sub.add_option("--peak-ratio", a->peak_ratio,
+                     "Each texel's importance is at least 1/K of the radiance the look-up reaches in it; 0 = off "
+                     "(default 8)")
+          ->type_name("K");
       sub.add_option("--normal", a->normal, "Shading normal (default 0,0,1)")->type_name("x,y,z");
       sub.add_option("--wo", a->wo, "Outgoing direction, towards the viewer (default 1,0,1 normalized)")
           ->type_name("x,y,z");
