@@ -360,6 +360,19 @@ def markdown(a, results, loaded_note):
                 1000 * r["seconds_per_spp"], fmt(last["relmse_all"]),
                 fmt(ratio("efficiency_sphere"), ".2f"), fmt(ratio("efficiency_all"), ".2f")))
         lines.append("")
+        # The ratio at every spp: stratified samples make it depend on the spp.
+        lines += ["| efficiency vs Cycles, sphere | " + " | ".join("%d spp" % s for s in a.spp) + " |",
+                  "|" + "---|" * (len(a.spp) + 1)]
+        cycles_rows = res["renderers"]["cycles"]["spp"]
+        for key, r in res["renderers"].items():
+            if key == "cycles":
+                continue
+            cells = []
+            for mine, theirs in zip(r["spp"], cycles_rows):
+                ok = mine["efficiency_sphere"] and theirs["efficiency_sphere"]
+                cells.append(fmt(mine["efficiency_sphere"] / theirs["efficiency_sphere"] if ok else None, ".2f"))
+            lines.append("| %s | %s |" % (key, " | ".join(cells)))
+        lines.append("")
     return "\n".join(lines) + "\n"
 
 
