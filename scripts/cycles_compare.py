@@ -65,7 +65,9 @@ class Parser(argparse.ArgumentParser):
 
 def parse_args(argv):
     p = Parser(prog="cycles-compare.sh",
-                                description="Cycles vs envpis on matched sphere scenes (docs/cycles.md)")
+                                description="Cycles vs envpis on matched sphere scenes (docs/cycles.md)",
+               epilog="cycles-compare.sh also takes --install (or CYCLES_INSTALL=1): apt-get install blender "
+                      "when it is missing.")
     p.add_argument("--maps", default="sunrise,studio",
                    help="comma-separated maps: a name in %s, or a path to a 2:1 lat-long EXR" % STUDIOLIGHTS)
     p.add_argument("--roughness", default="0.2,0.5",
@@ -137,20 +139,22 @@ def run(cmd, what):
 
 def read_exr(path):
     """(pixels as float64 [height, width, 3] in R, G, B order, header attributes as a dict of strings)."""
-    info = run(["oiiotool", "--info", "-v", path], "oiiotool --info " + path)
-    header = {}
-    for line in info.splitlines():
+    # One oiiotool run prints the header ("    name: value" lines) and then every pixel
+    # ("    Pixel (x, y): c0 c1 ...", scanline order from the top row, values with 9 decimals).
+    out = run(["oiiotool", "--info", "-v", "--dumpdata", path], "oiiotool --info --dumpdata " + path)
+    header, values = {}, []
+    for line in out.splitlines():
+        if line.startswith("    Pixel ("):
+            values.append(line.split(":", 1)[1])
+            continue
         m = re.match(r"\s+([^:]+):\s*(.*)$", line)
         if m:
             header[m.group(1).strip()] = m.group(2).strip().strip('"')
     channels = [c.strip() for c in header.get("channel list", "").split(",")]
-    m = re.search(r":\s+(\d+) x\s+(\d+),", info)
+    m = re.search(r":\s+(\d+) x\s+(\d+),", out)
     if not m or not all(c in channels for c in "RGB"):
-        raise Failure("'%s': not an RGB image (oiiotool says: %s)" % (path, info.splitlines()[:2]))
+        raise Failure("'%s': not an RGB image (oiiotool says: %s)" % (path, out.splitlines()[:2]))
     width, height = int(m.group(1)), int(m.group(2))
-    dump = run(["oiiotool", "--dumpdata", path], "oiiotool --dumpdata " + path)
-    # Lines "    Pixel (x, y): c0 c1 ...", in scanline order from the top row.
-    values = [line.split(":", 1)[1] for line in dump.splitlines() if line.lstrip().startswith("Pixel (")]
     data = np.array(" ".join(values).split(), dtype=np.float64)
     if data.size != width * height * len(channels):
         raise Failure("'%s': expected %d values, read %d" % (path, width * height * len(channels), data.size))
@@ -307,8 +311,10 @@ def measure_scene(a, env, roughness):
                          "relmse_all": median([r["relmse_all"] for r in per_seed]),
                          "seconds": median([r["seconds"] for r in per_seed])})
         # Seconds per spp from the largest spp (the most samples: the least timer and start-up noise, and
-        # Blender's render_time has 10 ms steps); efficiency uses spp x this rate.
-        rate = rows[-1]["seconds"] / rows[-1]["spp"]
+        # Blender's render_time has 10 ms steps), the fastest seed (other processes only ever slow a
+        # render down; envpis compare also keeps the minimum of its timing repeats). Efficiency at any
+        # spp uses spp x this rate.
+        rate = min(r["seconds"] for r in rows[-1]["seeds"]) / rows[-1]["spp"]
         for r in rows:
             r["efficiency_sphere"] = 1.0 / (r["relmse_sphere"] * r["spp"] * rate) if r["relmse_sphere"] > 0 else None
             r["efficiency_all"] = 1.0 / (r["relmse_all"] * r["spp"] * rate) if r["relmse_all"] > 0 else None
@@ -393,7 +399,8 @@ def main(argv):
                    "cycles_pattern": a.pattern, "ortho_height": ORTHO_HEIGHT, "loadavg": [load_before, load_after],
                    "relmse_definition": "mean over pixels of mean over RGB of (I-R)^2/(R^2+0.01), R = the renderer's "
                                         "own reference; median over seeds",
-                   "efficiency_definition": "1/(relMSE x spp x seconds_per_spp), seconds_per_spp from the largest spp",
+                   "efficiency_definition": "1/(relMSE x spp x seconds_per_spp), seconds_per_spp from the fastest seed "
+                                            "at the largest spp",
                    "scenes": results, "wall_seconds": time.time() - start}
         with open(os.path.join(a.out, "results.json"), "w") as f:
             json.dump(summary, f, indent=1)
