@@ -28,7 +28,7 @@ if [ "$install" = 1 ] && ! command -v blender >/dev/null 2>&1; then
 fi
 BLENDER=${BLENDER:-blender}
 if ! command -v "$BLENDER" >/dev/null 2>&1; then
-  echo "cycles-compare: error: blender ($BLENDER) is not installed; run with --install (or CYCLES_INSTALL=1) to apt-get it" >&2
+  echo "cycles-compare: error: blender is not installed ('$BLENDER' not found); run with --install (or CYCLES_INSTALL=1) to apt-get it" >&2
   exit 1
 fi
 for tool in oiiotool; do

@@ -354,16 +354,19 @@ def markdown(a, results, loaded_note):
                                                                    ag["ratio_of_means"], ag["p95_relative_difference"]))
         lines.append("")
         head = "| renderer | " + " | ".join("relMSE %d spp" % s for s in a.spp) + \
-            " | slope %d-%d | ms/spp | relMSE all px %d spp | efficiency vs Cycles, sphere (all px) at %d spp |" \
-            % (a.spp[-2] if len(a.spp) > 1 else top, top, top, top)
-        lines += [head, "|" + "---|" * (len(a.spp) + 5)]
+            " | slope %d-%d | ms/spp | relMSE all px %d spp | relMSE Cycles / this at %d spp " \
+            "| efficiency vs Cycles, sphere (all px) at %d spp |" \
+            % (a.spp[-2] if len(a.spp) > 1 else top, top, top, top, top)
+        lines += [head, "|" + "---|" * (len(a.spp) + 6)]
         cyc = res["renderers"]["cycles"]["spp"][-1]
         for key, r in res["renderers"].items():
             last = r["spp"][-1]
             ratio = lambda k: (last[k] / cyc[k]) if last[k] and cyc[k] else None
-            lines.append("| %s | %s | %s | %.2f | %s | %s (%s) |" % (
+            # The equal-spp relMSE ratio needs no timing, so a busy machine does not change it.
+            spp_ratio = cyc["relmse_sphere"] / last["relmse_sphere"] if last["relmse_sphere"] else None
+            lines.append("| %s | %s | %s | %.2f | %s | %s | %s (%s) |" % (
                 key, " | ".join(fmt(x["relmse_sphere"]) for x in r["spp"]), fmt(r["slope_sphere"], ".2f"),
-                1000 * r["seconds_per_spp"], fmt(last["relmse_all"]),
+                1000 * r["seconds_per_spp"], fmt(last["relmse_all"]), fmt(spp_ratio, ".2f"),
                 fmt(ratio("efficiency_sphere"), ".2f"), fmt(ratio("efficiency_all"), ".2f")))
         lines.append("")
         # The ratio at every spp: stratified samples make it depend on the spp.
