@@ -119,7 +119,9 @@ def parse_args(argv):
 
 
 def resolve_map(name):
-    path = name if os.sep in name or name.endswith(".exr") else os.path.join(STUDIOLIGHTS, name + ".exr")
+    # A bare name ("sunrise") is one of Blender's studio lights; anything with a directory or an extension
+    # is a path.
+    path = name if os.sep in name or os.path.splitext(name)[1] else os.path.join(STUDIOLIGHTS, name + ".exr")
     if not os.path.isfile(path):
         raise Failure("map '%s': no such file '%s'" % (name, path))
     return os.path.abspath(path)
@@ -315,9 +317,10 @@ def measure_scene(a, env, roughness):
         # render down; envpis compare also keeps the minimum of its timing repeats). Efficiency at any
         # spp uses spp x this rate.
         rate = min(r["seconds"] for r in rows[-1]["seeds"]) / rows[-1]["spp"]
-        for r in rows:
-            r["efficiency_sphere"] = 1.0 / (r["relmse_sphere"] * r["spp"] * rate) if r["relmse_sphere"] > 0 else None
-            r["efficiency_all"] = 1.0 / (r["relmse_all"] * r["spp"] * rate) if r["relmse_all"] > 0 else None
+        for r in rows:  # None when a time rounds to 0 (Blender's 10 ms steps on a tiny image) or relMSE is 0
+            r["efficiency_sphere"] = 1.0 / (r["relmse_sphere"] * r["spp"] * rate) \
+                if r["relmse_sphere"] > 0 and rate > 0 else None
+            r["efficiency_all"] = 1.0 / (r["relmse_all"] * r["spp"] * rate) if r["relmse_all"] > 0 and rate > 0 else None
         slope = None
         if len(rows) >= 2 and rows[-1]["relmse_sphere"] > 0 and rows[-2]["relmse_sphere"] > 0:
             slope = math.log(rows[-1]["relmse_sphere"] / rows[-2]["relmse_sphere"]) / \
