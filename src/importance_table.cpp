@@ -21,6 +21,7 @@ namespace envpis {
 namespace {
 constexpr int kMaxTop = 256;
 constexpr int kMaxFine = 16384;
+constexpr int kAutoFineCap = 2904;  // the automatic N of a 4096 x 2048 map: 67 MB of table
 }  // namespace
 
 ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options) {
@@ -36,9 +37,10 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
   T_ = options.top_resolution;
   int n = options.fine_resolution;
-  if (n == 0) {
+  if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)
     const double texels = double(map.width()) * double(map.height());
-    n = static_cast<int>(std::ceil(std::sqrt(texels) - 1e-9));
+    const int n1 = static_cast<int>(std::ceil(std::sqrt(texels) - 1e-9));
+    n = std::max(n1, std::min(2 * n1, kAutoFineCap));
   }
   F_ = std::max(1, (n + T_ - 1) / T_);
   N_ = T_ * F_;

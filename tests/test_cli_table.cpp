@@ -73,17 +73,17 @@ TEST_F(CliTable, SunsetWritesPicturesAndSummary) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("1024x512 latlong"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("orientation panorama  filter bilinear"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("T=12 (144 top cells)  F=61  N=732"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("T=12 (144 top cells)  F=121  N=1452"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("build:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("memory:  table"), std::string::npos) << r.output;
   // sunset.exr has a few negative texels: the repair is reported on stderr.
   EXPECT_NE(r.output.find("warning:"), std::string::npos) << r.output;
 
   expect_png(fs::path(out) / "map.png", 1024, 512);
-  expect_png(fs::path(out) / "importance.png", 732, 732);
+  expect_png(fs::path(out) / "importance.png", 1452, 1452);
   expect_png(fs::path(out) / "top_level.png", 768, 768);
   expect_png(fs::path(out) / "product_weights.png", 768, 768);
-  expect_png(fs::path(out) / "product_samples.png", 732, 732);
+  expect_png(fs::path(out) / "product_samples.png", 1452, 1452);
 
   std::ifstream f(fs::path(out) / "summary.json");
   ASSERT_TRUE(f.good());
@@ -93,7 +93,7 @@ TEST_F(CliTable, SunsetWritesPicturesAndSummary) {
   EXPECT_EQ(j["map"]["orientation"], "panorama");
   EXPECT_EQ(j["map"]["filter"], "bilinear");
   EXPECT_EQ(j["table"]["top_resolution"], 12);
-  EXPECT_EQ(j["table"]["fine_resolution"], 732);
+  EXPECT_EQ(j["table"]["fine_resolution"], 1452);
   EXPECT_GT(j["table"]["build_seconds"].get<double>(), 0.0);
   EXPECT_GT(j["table"]["bytes_used"].get<double>(), 0.0);
   // O(T^2) overhead at most over a single-level 2D CDF.

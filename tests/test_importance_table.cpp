@@ -88,8 +88,8 @@ TEST(ImportanceTable, FineResolutionRule) {
   const auto map = synthetic_latlong(1024, 512, [](int, int) { return 1.0f; });
   const ImportanceTable t(map);
   EXPECT_EQ(t.top_resolution(), 12);
-  EXPECT_EQ(t.fine_resolution(), 732);  // smallest multiple of 12 with N^2 >= 1024 * 512
-  EXPECT_EQ(t.cell_resolution(), 61);
+  EXPECT_EQ(t.fine_resolution(), 1452);  // smallest multiple of 12 with N >= 2 sqrt(1024 * 512)
+  EXPECT_EQ(t.cell_resolution(), 121);
   ImportanceTableOptions o;
   o.top_resolution = 8;
   o.fine_resolution = 100;
@@ -222,7 +222,8 @@ TEST(ImportanceTable, DensityPositiveWhereverRadianceIsPositive) {
       ASSERT_FALSE(t.empty());
       // Nearly all samples land within a few table texels of the bright texel.
       const Vec3 centre = m.to_world(latlong_to_direction({(col + 0.5f) / w, (row + 0.5f) / h}));
-      const float cos_cap = std::cos(4.0f * std::sqrt(4 * kPi) / t.fine_resolution());
+      // Within four map-resolution texel sides (the table is twice as fine as the map).
+      const float cos_cap = std::cos(8.0f * std::sqrt(4 * kPi) / t.fine_resolution());
       int inside = 0;
       for (int i = 0; i < 4000; ++i)
         inside += dot(t.sample({(i + 0.5f) / 4000, std::fmod(i * 0.618034f, 1.0f)}).direction, centre) > cos_cap;
@@ -255,7 +256,8 @@ TEST(ImportanceTable, FollowsTheLatLongOrientation) {
       const double phi = pano ? 2 * M_PI * (0.5 - u) : 2 * M_PI * u;
       const Vec3 bright{float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
                         float(std::cos(theta))};
-      const float cos_cap = std::cos(4.0f * std::sqrt(4 * kPi) / t.fine_resolution());
+      // Within four map-resolution texel sides (the table is twice as fine as the map).
+      const float cos_cap = std::cos(8.0f * std::sqrt(4 * kPi) / t.fine_resolution());
       int inside = 0;
       for (int i = 0; i < 4000; ++i) {
         const DirectionSample s = t.sample({(i + 0.5f) / 4000, std::fmod(i * 0.618034f, 1.0f)});
@@ -370,7 +372,7 @@ TEST(ImportanceTable, MemoryWithinSingleLevelPlusOfT2) {
   const ImportanceTable t(synthetic_latlong(1024, 512, [](int x, int) { return 1.0f + x; }));
   const std::size_t T2 = std::size_t(t.cell_count());
   EXPECT_LE(t.bytes_used(), t.single_level_bytes() + 64 * T2 + 4096);
-  EXPECT_GT(t.bytes_used(), 2 * sizeof(float) * 732 * 732);
+  EXPECT_GT(t.bytes_used(), 2 * sizeof(float) * 1452 * 1452);
 }
 
 TEST(ImportanceTable, AllBlackMapIsEmpty) {

@@ -6,9 +6,13 @@
 //   fine level: N x N texels, N = T * F. Each top cell owns the F x F texels inside it and its own
 //               piecewise-constant 2D distribution over them.
 //
-// Fine resolution rule: N is the smallest multiple of T with N^2 >= the map's texel count
-// (so the table has at least as many texels as the image; 1024x512 -> N = 732, F = 61), unless
-// ImportanceTableOptions::fine_resolution sets it (rounded up to a multiple of T).
+// Fine resolution rule: N is the smallest multiple of T with N >= 2 sqrt(texel count), i.e. four table
+// texels per map texel (1024x512 -> N = 1452, F = 121), but no more than 2904 unless the map alone
+// has more texels (then N^2 >= texel count: 4096x2048 -> 2904). ImportanceTableOptions::fine_resolution
+// overrides it (rounded up to a multiple of T). Why twice: table texels never line up with a lat-long
+// map's texels, so at equal resolution each table texel mixes several map texels and its importance
+// misstates what eval returns inside it; at twice the resolution sunrise's relMSE on fig1 halves
+// (BENCHMARKS.md).
 //
 // Importance of a fine texel: the average of the RGB channels of the radiance, averaged over the
 // texel by stratified bilinear look-ups (or, where map texels are much smaller than table texels, by
