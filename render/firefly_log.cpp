@@ -37,14 +37,14 @@ void write_firefly_csv(const std::string& path, const std::vector<FireflyRecord>
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (!f) throw Error("cannot write '" + path + "': " + std::strerror(errno));
   std::fputs(
-      "x,y,sample,depth,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight,radiance,f_cos,beta,"
+      "x,y,sample,depth,object,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight,radiance,f_cos,beta,"
       "dir_x,dir_y,dir_z,cell,texel_x,texel_y,texel_importance,table_pdf,cell_env_probability,"
       "cell_probability,pdf_in_cell,proxy_cell,proxy_direction\n",
       f);
   for (const FireflyRecord& r : records)
-    std::fprintf(f, "%d,%d,%d,%d,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%d,%.9g,%.9g,%.9g,"
+    std::fprintf(f, "%d,%d,%d,%d,%d,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%d,%.9g,%.9g,%.9g,"
                     "%.9g,%.9g,%.9g,%.9g\n",
-                 r.x, r.y, r.sample, r.depth, to_string(r.technique), r.contribution.average(), r.threshold,
+                 r.x, r.y, r.sample, r.depth, r.object, to_string(r.technique), r.contribution.average(), r.threshold,
                  r.light_pdf, r.bsdf_pdf, r.mis_weight, r.radiance.average(), r.f_cos.average(), r.beta.average(),
                  r.direction.x, r.direction.y, r.direction.z, r.cell, r.texel_x, r.texel_y, r.texel_importance,
                  r.table_pdf, r.cell_env_probability, r.cell_probability, r.pdf_in_cell, r.proxy_cell,
@@ -76,6 +76,7 @@ void FireflyRecorder::record(const FireflyEvent& e, const LightSampler& light) {
   r.y = y_;
   r.sample = sample_;
   r.depth = e.depth;
+  r.object = e.object;
   r.technique = e.technique;
   r.contribution = e.contribution;
   r.threshold = threshold_;

@@ -50,6 +50,7 @@ struct FireflyRecord {
   int x = 0, y = 0;      ///< pixel
   int sample = 0;        ///< sample index in the pixel
   int depth = 0;         ///< path vertex (0: the camera ray's first hit)
+  int object = -1;       ///< the object shaded at that vertex (Scene::objects() index)
   SampleTechnique technique = SampleTechnique::Light;
   Rgb contribution;      ///< what the sample added to the pixel sum at this vertex
   float threshold = 0;   ///< the pixel's threshold it exceeded
@@ -82,7 +83,7 @@ void write_firefly_csv(const std::string& path, const std::vector<FireflyRecord>
 /// What the integrator knows about one contribution; the recorder adds the table's view of it.
 struct FireflyEvent {
   SampleTechnique technique = SampleTechnique::Light;
-  int depth = 0;
+  int depth = 0, object = -1;
   Rgb contribution, radiance, f_cos, beta;
   Vec3 direction;
   float light_pdf = 0, bsdf_pdf = 0, mis_weight = 1;

@@ -80,7 +80,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
               const Rgb c = beta * f * Le * (w / ls.pdf);
               L += c;
               if (log && log->exceeds(c.average()))
-                log->record({SampleTechnique::Light, depth, c, Le, f, beta, wi, ls.pdf, mat.bsdf.pdf(wo_l, wi_l), w},
+                log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, mat.bsdf.pdf(wo_l, wi_l), w},
                             light);
             }
           }
@@ -106,7 +106,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
         L += c;
         if (log && log->exceeds(c.average())) {
           const float light_pdf = light.has_light_samples() ? light.pdf(next.direction) : 0.0f;
-          log->record({SampleTechnique::Bsdf, depth, c, Le, bs->weight * bs->pdf, beta, next.direction, light_pdf,
+          log->record({SampleTechnique::Bsdf, depth, hit.object, c, Le, bs->weight * bs->pdf, beta, next.direction, light_pdf,
                        bs->pdf, w},
                       light);
         }

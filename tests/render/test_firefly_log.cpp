@@ -73,6 +73,7 @@ void expect_consistent(const FireflyRecord& r, const StrategyTables& tables, con
   EXPECT_GT(r.contribution.average(), threshold);
   EXPECT_EQ(r.threshold, threshold);
   EXPECT_EQ(r.depth, 0);  // direct
+  EXPECT_TRUE(r.object >= 0 && r.object < 8) << r.object;  // fig1's spheres
   const Rgb expect = r.beta * r.radiance * r.f_cos * (r.mis_weight / pdf);
   EXPECT_TRUE(near(r.contribution.r, expect.r, 1e-5f)) << r.contribution.r << " vs " << expect.r;
   EXPECT_TRUE(near(r.contribution.b, expect.b, 1e-5f)) << r.contribution.b << " vs " << expect.b;
@@ -109,11 +110,12 @@ TEST(FireflyLog, CatchesLightSamplesWithConsistentFieldsAndTheOldTablesFireflies
     o.firefly_log = &log;
     o.tables = &tables;
     const RenderResult r = render(sun_scene(), o);
-    int light = 0, over_bound = 0;
+    int light = 0, over_bound = 0, same_object = 0;
     float worst = 0;  // largest radiance / texel importance of a light sample
     const LightSampler sampler(tables);  // mis: the density does not depend on the shading point
     for (const FireflyRecord& f : r.fireflies) {
       expect_consistent(f, tables, log);
+      same_object += f.object == r.object_id[static_cast<std::size_t>(f.y) * 64 + f.x];
       EXPECT_TRUE(near(f.light_pdf, sampler.pdf(f.direction), 1e-4f)) << f.light_pdf << " vs " << sampler.pdf(f.direction);
       EXPECT_TRUE(near(f.light_pdf, f.table_pdf, 1e-4f));
       if (f.technique != SampleTechnique::Light) continue;
@@ -122,6 +124,7 @@ TEST(FireflyLog, CatchesLightSamplesWithConsistentFieldsAndTheOldTablesFireflies
       if (f.radiance.average() > 1.001f * 8 * f.texel_importance) ++over_bound;
     }
     EXPECT_GE(light, 100) << r.fireflies.size() << " records";
+    EXPECT_GT(same_object, 0.9 * double(r.fireflies.size()));  // but samples near a silhouette
     if (K == 0) {
       EXPECT_GE(over_bound, 10);
       EXPECT_GT(worst, 1000);
@@ -269,7 +272,7 @@ TEST(FireflyLogCommand, RenderAndCompareWriteCsvAndRejectBadValues) {
     EXPECT_EQ(std::count(results[i].output.begin(), results[i].output.end(), '\n'), 1) << bad[i].first;
   }
 
-  const std::string header = "x,y,sample,depth,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight";
+  const std::string header = "x,y,sample,depth,object,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight";
   const auto ok = test::run_envpis_all(
       {"render " + small + "--strategy mis --out " + out + " --firefly-log " + csv + " --firefly-threshold 0.5",
        "compare " + compare + "--firefly-log " + (dir.path / "ff").string() + " --firefly-factor 0.5"},
