@@ -29,7 +29,7 @@ namespace {
 inline bool sides_agree(Vec3 wi, Vec3 ng, float local_z) { return (dot(wi, ng) > 0) == (local_z > 0); }
 }  // namespace
 
-Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light) const {
+Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log) const {
   Rgb L{0, 0, 0};
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit)) return env_.eval(camera_ray.direction);
@@ -77,7 +77,11 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
             const Rgb Le = env_.eval(wi);
             if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
               const float w = light.uses_mis() ? mis_weight(ls.pdf, mat.bsdf.pdf(wo_l, wi_l)) : 1.0f;
-              L += beta * f * Le * (w / ls.pdf);
+              const Rgb c = beta * f * Le * (w / ls.pdf);
+              L += c;
+              if (log && log->exceeds(c.average()))
+                log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, mat.bsdf.pdf(wo_l, wi_l), w},
+                            light);
             }
           }
         }
@@ -97,7 +101,15 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       if (light.bsdf_hits_count()) {
         float w = 1.0f;
         if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction));
-        L += beta_next * env_.eval(next.direction) * w;
+        const Rgb Le = env_.eval(next.direction);
+        const Rgb c = beta_next * Le * w;
+        L += c;
+        if (log && log->exceeds(c.average())) {
+          const float light_pdf = light.has_light_samples() ? light.pdf(next.direction) : 0.0f;
+          log->record({SampleTechnique::Bsdf, depth, hit.object, c, Le, bs->weight * bs->pdf, beta, next.direction, light_pdf,
+                       bs->pdf, w},
+                      light);
+        }
       }
       break;
     }

@@ -17,6 +17,7 @@
 
 #include <string>
 
+#include "render/firefly_log.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/strategy.h"
@@ -42,8 +43,9 @@ constexpr unsigned kDimensionsPerVertex = 8;
 class Integrator {
  public:
   Integrator(const Scene& scene, const IntegratorOptions& options);
-  /// Radiance arriving along the camera ray.
-  Rgb li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light) const;
+  /// Radiance arriving along the camera ray. `log` (null: off) sees every light and BSDF sample
+  /// contribution that exceeds its threshold (render/firefly_log.h); it changes nothing.
+  Rgb li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log = nullptr) const;
   const IntegratorOptions& options() const { return options_; }
 
  private:

@@ -63,6 +63,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   if (W <= 0 || H <= 0 || W > kMaxImageSide || H > kMaxImageSide || std::int64_t(W) * H > kMaxImagePixels)
     throw Error("invalid image size " + std::to_string(W) + "x" + std::to_string(H));
   const Camera camera(scene.camera(), W, H);
+  if (options.firefly_log) validate(*options.firefly_log, W, H);
 
   RenderResult r;
   r.width = W;
@@ -101,6 +102,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   int last_reported = -1;
 
   tbb::enumerable_thread_specific<std::optional<LightSampler>> samplers;
+  tbb::enumerable_thread_specific<std::optional<FireflyRecorder>> recorders;
+  std::atomic<std::size_t> fireflies_kept{0};
   const auto t0 = std::chrono::steady_clock::now();
   const double cpu0 = process_cpu_seconds();
   auto body = [&] {
@@ -110,6 +113,12 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
           auto& slot = samplers.local();
           if (!slot) slot.emplace(*tables);
           LightSampler& light = *slot;
+          FireflyRecorder* log = nullptr;
+          if (options.firefly_log) {
+            auto& rec = recorders.local();
+            if (!rec) rec.emplace(*options.firefly_log, W, tables->table.get(), &fireflies_kept);
+            log = &*rec;
+          }
           for (int tile = range.begin(); tile < range.end(); ++tile) {
             const int x0 = (tile % tiles_x) * ts, y0 = (tile / tiles_x) * ts;
             const int x1 = std::min(W, x0 + ts), y1 = std::min(H, y0 + ts);
@@ -122,7 +131,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                   PixelSampler rng(options.sampler, options.seed, pix, static_cast<std::uint64_t>(s));
                   const Point2 jitter = rng.next2d();
                   const Ray ray = camera.generate_ray(float(x) + jitter.x, float(y) + jitter.y);
-                  const Rgb L = integrator.li(ray, rng, light);
+                  if (log) log->begin_sample(x, y, s);
+                  const Rgb L = integrator.li(ray, rng, light, log);
                   sum[0] += L.r;
                   sum[1] += L.g;
                   sum[2] += L.b;
@@ -173,6 +183,12 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.cpu_seconds = process_cpu_seconds() - cpu0;
   r.nonfinite_pixels = nonfinite.load();
+  for (auto& rec : recorders) {
+    if (!rec) continue;
+    r.fireflies.insert(r.fireflies.end(), rec->records.begin(), rec->records.end());
+    r.fireflies_dropped += rec->dropped;
+  }
+  sort_records(r.fireflies);
   return r;
 }
 

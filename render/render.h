@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "render/firefly_log.h"
 #include "render/integrator.h"
 #include "render/sampler.h"
 #include "render/scene.h"
@@ -51,6 +52,10 @@ struct RenderOptions {
   /// Prebuilt tables for this strategy and the scene's environment (e.g. shared between renders);
   /// null: render() builds them (their time is reported in setup_seconds, not seconds).
   const StrategyTables* tables = nullptr;
+  /// Firefly log (render/firefly_log.h): null (default) = off, at no cost. When set, every light or
+  /// BSDF sample contribution above its threshold is returned in RenderResult::fireflies; the image
+  /// is bit-identical either way. Must outlive the call.
+  const FireflyLogOptions* firefly_log = nullptr;
   /// Called with the fraction of tiles done (0..1), from worker threads but never concurrently.
   std::function<void(double)> progress;
 };
@@ -68,6 +73,10 @@ struct RenderResult {
   double setup_seconds = 0;     ///< wall seconds spent building tables (0 when prebuilt)
   std::uint64_t samples = 0;    ///< width * height * spp
   std::size_t nonfinite_pixels = 0;  ///< pixels whose estimate was NaN/Inf: set to 0
+  /// With RenderOptions::firefly_log: the contributions above the threshold, sorted (sort_records),
+  /// and how many more there were beyond FireflyLogOptions::max_records.
+  std::vector<FireflyRecord> fireflies;
+  std::size_t fireflies_dropped = 0;
 
   Rgb pixel(int x, int y) const {
     const float* p = &rgb[(static_cast<std::size_t>(y) * width + x) * 3];

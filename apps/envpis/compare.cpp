@@ -88,6 +88,7 @@ struct CompareArgs {
   std::string cache_dir;
   std::string report_dir;
   std::string out;
+  std::string firefly_log, firefly_factor;  // empty: no log; the factor's default is kFireflyFactor
   bool no_cache = false;
   bool no_convergence = false;
   bool no_plots = false;
@@ -138,6 +139,22 @@ struct Reference {
   Strategy strategy = Strategy::Mis;
   bool cached = false;
 };
+
+constexpr double kFireflyFactor = 10;
+
+/// --firefly-log's per-pixel thresholds: a sample is logged when its contribution divided by spp exceeds
+/// factor * sqrt(R^2 + kRelEpsilon), R the reference pixel's channel average. That is the tail metric's
+/// scale (metrics.h): at factor 10, one logged sample alone takes its pixel about 10x off.
+FireflyLogOptions relative_firefly_log(const Reference& ref, int spp, double factor) {
+  FireflyLogOptions log;
+  const std::size_t npix = static_cast<std::size_t>(ref.width) * ref.height;
+  log.pixel_threshold.resize(npix);
+  for (std::size_t p = 0; p < npix; ++p) {
+    const double R = (double(ref.rgb[p * 3]) + ref.rgb[p * 3 + 1] + ref.rgb[p * 3 + 2]) / 3;
+    log.pixel_threshold[p] = static_cast<float>(factor * spp * std::sqrt(R * R + kRelEpsilon));
+  }
+  return log;
+}
 
 ImageMetrics measure_image(const RenderResult& r, const Reference& ref, const std::vector<Region>& regions) {
   std::vector<int> ids;
@@ -541,6 +558,20 @@ void run(const CompareArgs& a, const std::string& command_line) {
     check.spp = ref_spp;
     validate(check);
   }
+  double firefly_factor = kFireflyFactor;
+  if (!a.firefly_factor.empty()) {
+    if (a.firefly_log.empty()) throw Error("--firefly-factor needs --firefly-log");
+    firefly_factor = parse_number_in("--firefly-factor", a.firefly_factor, 0, 1e30, "> 0");
+    if (!(firefly_factor > 0)) throw Error("--firefly-factor: must be > 0, got '" + a.firefly_factor + "'");
+  }
+  if (!a.firefly_log.empty()) {
+    std::error_code ec;
+    if (fs::exists(a.firefly_log, ec) && !fs::is_directory(a.firefly_log, ec))
+      throw Error("--firefly-log '" + a.firefly_log + "' exists and is not a directory");
+    fs::create_directories(a.firefly_log, ec);
+    if (ec) throw Error("cannot create --firefly-log '" + a.firefly_log + "': " + ec.message());
+    check_writable_file((fs::path(a.firefly_log) / "fireflies-mis.csv").string(), "--firefly-log");
+  }
   if (a.out.empty()) throw Error("--out is required (the output directory)");
   const fs::path out(a.out);
   {
@@ -592,8 +623,10 @@ void run(const CompareArgs& a, const std::string& command_line) {
   };
   // A progress bar on a terminal for renders that take a while (the reference, the oracle).
   const bool bar = !a.quiet && isatty(STDERR_FILENO);
-  auto do_render = [&](Strategy s, int n, std::uint64_t sd, const std::string& label) {
+  auto do_render = [&](Strategy s, int n, std::uint64_t sd, const std::string& label,
+                       const FireflyLogOptions* log = nullptr) {
     RenderOptions o = base;
+    o.firefly_log = log;
     o.strategy = s;
     o.spp = n;
     o.seed = sd;
@@ -675,6 +708,9 @@ void run(const CompareArgs& a, const std::string& command_line) {
   ref.strategy = ref_strategy;
 
   // 5. Equal spp (timing repeated, minimum kept), which also gives the object-id AOV and the calibration.
+  // The firefly log, if asked for, sees these first-seed renders (a log does not change the image).
+  std::optional<FireflyLogOptions> firefly_log;
+  if (!a.firefly_log.empty()) firefly_log = relative_firefly_log(ref, spp, firefly_factor);
   std::vector<Measured> eq_spp;
   std::vector<Region> regions;
   std::vector<RenderResult> eq_images;
@@ -684,7 +720,17 @@ void run(const CompareArgs& a, const std::string& command_line) {
     m.strategy = s;
     m.spp = spp;
     m.stem = std::string("spp-") + to_string(s);
-    RenderResult r = do_render(s, spp, seed, std::string("equal spp: ") + to_string(s));
+    RenderResult r = do_render(s, spp, seed, std::string("equal spp: ") + to_string(s),
+                               firefly_log ? &*firefly_log : nullptr);
+    if (firefly_log) {
+      const std::string csv = (fs::path(a.firefly_log) / (std::string("fireflies-") + to_string(s) + ".csv")).string();
+      write_firefly_csv(csv, r.fireflies);
+      progress.line("firefly log: %-8s %zu samples over %g x the reference -> %s", to_string(s), r.fireflies.size(),
+                    firefly_factor, csv.c_str());
+      if (r.fireflies_dropped > 0)
+        std::fprintf(stderr, "envpis compare: warning: %zu more %s fireflies not kept (raise --firefly-factor)\n",
+                     r.fireflies_dropped, to_string(s));
+    }
     m.seconds_runs.push_back(r.seconds);
     m.seconds = r.seconds;
     m.cpu_seconds = r.cpu_seconds;
@@ -1076,6 +1122,13 @@ const RegisterCommand reg{{"compare",
                              sub.add_flag("--no-plots", a->no_plots, "do not run report/plots.py");
                              sub.add_option("--report-dir", a->report_dir, "directory of template.html, report.js, plots.py")->type_name("DIR");
                              sub.add_option("--out", a->out, "output directory (metrics.json, images/, index.html)")->type_name("DIR");
+                             sub.add_option("--firefly-log", a->firefly_log,
+                                            "write DIR/fireflies-STRATEGY.csv: the samples of each equal-spp render "
+                                            "(first seed) whose contribution / spp exceeds --firefly-factor times "
+                                            "the reference pixel (docs/fireflies.md)")->type_name("DIR");
+                             sub.add_option("--firefly-factor", a->firefly_factor,
+                                            "firefly log: F in contribution / spp > F sqrt(R^2 + 0.01) (default 10)")
+                                 ->type_name("F");
                              sub.add_flag("--quiet", a->quiet, "no progress lines");
                              sub.callback([a, &sub] {
                                // CLI11 keeps no argv; rebuild the command from what was parsed.

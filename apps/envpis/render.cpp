@@ -36,6 +36,7 @@ struct RenderArgs {
   std::string width = "0", height = "0";
   std::string out;
   std::string id_out;
+  std::string firefly_log, firefly_threshold;  // empty: no log
   bool quiet = false;
 };
 
@@ -74,6 +75,15 @@ void run(const RenderArgs& a) {
   if (ext != ".exr") throw Error("--out must name an OpenEXR file (.exr), got '" + a.out + "'");
   check_writable_file(a.out, "--out");
   if (!a.id_out.empty()) check_writable_file(a.id_out, "--id-out");
+  FireflyLogOptions log;
+  if (!a.firefly_log.empty() || !a.firefly_threshold.empty()) {
+    if (a.firefly_threshold.empty()) throw Error("--firefly-log needs --firefly-threshold");
+    if (a.firefly_log.empty()) throw Error("--firefly-threshold needs --firefly-log");
+    log.threshold = static_cast<float>(parse_number_in("--firefly-threshold", a.firefly_threshold, 0, 3.0e38, "> 0"));
+    if (!(log.threshold > 0)) throw Error("--firefly-threshold: must be > 0, got '" + a.firefly_threshold + "'");
+    check_writable_file(a.firefly_log, "--firefly-log");
+    o.firefly_log = &log;
+  }
 
   // 2. Scene and environment.
   std::shared_ptr<const EnvironmentMap> env;
@@ -91,6 +101,7 @@ void run(const RenderArgs& a) {
   bar.finish();
   write_exr(a.out, r);
   if (!a.id_out.empty()) write_object_id(a.id_out, r);
+  if (o.firefly_log) write_firefly_csv(a.firefly_log, r.fireflies);
 
   // 4. Summary.
   std::printf("scene        %s (%zu objects), environment %s\n", a.common.scene.c_str(), scene.objects().size(),
@@ -103,6 +114,12 @@ void run(const RenderArgs& a) {
   std::printf("wall seconds %.3f (tables %.3f s; CPU %.3f s)\n", r.seconds, r.setup_seconds, r.cpu_seconds);
   std::printf("samples/s    %.4g\n", r.seconds > 0 ? double(r.samples) / r.seconds : 0.0);
   if (r.nonfinite_pixels > 0) std::printf("non-finite   %zu pixels set to 0\n", r.nonfinite_pixels);
+  if (o.firefly_log) {
+    std::printf("fireflies    %zu samples above %g in %s", r.fireflies.size(), double(log.threshold),
+                a.firefly_log.c_str());
+    if (r.fireflies_dropped > 0) std::printf(" (%zu more not kept: raise the threshold)", r.fireflies_dropped);
+    std::printf("\n");
+  }
   std::printf("wrote        %s\n", a.out.c_str());
 }
 
@@ -119,6 +136,12 @@ const RegisterCommand reg{{"render", "Render a scene with one sampling strategy 
                              a->common.add_sampling_options(sub);
                              sub.add_option("--out", a->out, "output OpenEXR file")->type_name("FILE.exr");
                              sub.add_option("--id-out", a->id_out, "also write the object-id AOV (first hit per pixel)")->type_name("FILE");
+                             sub.add_option("--firefly-log", a->firefly_log,
+                                            "write every sample contribution above --firefly-threshold as CSV "
+                                            "(docs/fireflies.md)")->type_name("FILE.csv");
+                             sub.add_option("--firefly-threshold", a->firefly_threshold,
+                                            "firefly log: channel-average radiance one sample adds to its pixel "
+                                            "sum at one vertex (> 0)")->type_name("T");
                              sub.add_flag("--quiet", a->quiet, "no progress bar");
                              sub.callback([a] { run(*a); });
                            }}};
