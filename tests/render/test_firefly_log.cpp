@@ -54,7 +54,9 @@ RenderOptions options(Strategy s, int threads = 0) {
   o.width = 64;
   o.height = 16;
   o.spp = 256;
-  o.light_table.peak_ratio = 0;  // the old table: texels next to the sun get sky-level importance
+  // The old table (its resolution and no peak bound): texels next to the sun get sky-level importance.
+  o.light_table.fine_resolution = 732;
+  o.light_table.peak_ratio = 0;
   o.threads = threads;
   return o;
 }
