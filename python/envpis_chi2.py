@@ -53,7 +53,9 @@ def chi2_pvalue(stat, dof):
 
 def expected_counts(pdf, count, resolution=32, sub=4):
     """Expected samples per equal-area bin (resolution x resolution) for `count` samples of `pdf`
-    (a function of an M x 3 direction array returning M densities per solid angle)."""
+    (a function of an M x 3 direction array returning M densities per solid angle). The samplers'
+    densities are constant over each of the table's N x N fine texels, so the integral is exact when
+    resolution * sub is a multiple of N (sub-samples at texel centres)."""
     r, s = resolution, sub
     # sub-sample centres of every bin, in bin-major order
     k = (np.arange(r * s) + 0.5) / (r * s)
