@@ -90,3 +90,25 @@ def test_cell_probabilities(table):
     probs = s.cell_probabilities()
     assert probs.shape == (12, 12)
     assert abs(probs.sum() - 1) < 1e-5
+
+
+def test_concurrent_calls_from_python_threads(table):
+    """The batch releases the GIL and shares the table read-only: calls from several Python threads
+    at once give the serial results."""
+    import threading
+
+    normals, wo, proxies, u, _ = inputs(5)
+    ref = envpis.product_sample(table, normals, wo, proxies, u, threads=1)
+    results = [None] * 4
+
+    def work(k):
+        results[k] = envpis.product_sample(table, normals, wo, proxies, u, threads=1)
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for got in results:
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[1], ref[1])
