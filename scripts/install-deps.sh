@@ -16,6 +16,8 @@ PACKAGES=(
   blender-data
   # report plots and the browser test
   python3 python3-matplotlib python3-numpy chromium
+  # the Python module (python/) and its tests
+  python3-dev pybind11-dev python3-pybind11 python3-pytest
 )
 
 # The report's browser test drives chromium with playwright-core from npm: Debian's node and npm unless

@@ -45,6 +45,8 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0}
 export TSAN_OPTIONS=${TSAN_OPTIONS:-suppressions=$ROOT/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1:history_size=4}
 
+# No Python module: an instrumented extension only loads into a Python started with the sanitizer
+# runtime preloaded, and the runs below are GoogleTest's (`-L unit`, the Thread tests).
 configure() {  # configure <dir> <sanitizer flags> <build the envpis command: ON|OFF>
   local dir=$1 flags=$2 apps=$3 cxx
   cxx=$(command -v "$CXX_BIN")
@@ -56,7 +58,8 @@ configure() {  # configure <dir> <sanitizer flags> <build the envpis command: ON
   cmake -S . -B "$dir" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=Debug \
     -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_CXX_FLAGS="$flags -fno-omit-frame-pointer" \
     -DCMAKE_EXE_LINKER_FLAGS="$flags" -DCMAKE_SHARED_LINKER_FLAGS="$flags" \
-    -DENVPIS_BUILD_TESTS=ON -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS="$apps" -DENVPIS_BUILD_FUZZ=OFF >/dev/null
+    -DENVPIS_BUILD_TESTS=ON -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS="$apps" -DENVPIS_BUILD_FUZZ=OFF \
+    -DENVPIS_BUILD_PYTHON=OFF >/dev/null
 }
 
 run_asan() {

@@ -28,4 +28,13 @@ cmake --build "$TMP/build"
 
 echo "== run"
 "$TMP/build/envpis_minimal"
+
+# The Python module, when the build has it: installed under the prefix and importable from there.
+PY=$(sed -n 's/^Python3_EXECUTABLE:FILEPATH=//p' "$BUILD/CMakeCache.txt")
+if grep -q '^ENVPIS_BUILD_PYTHON:BOOL=ON' "$BUILD/CMakeCache.txt"; then
+  MODULE=$(find "$PREFIX" -name 'envpis.cpython*.so' | head -n1)
+  [ -n "$MODULE" ] || { echo "test-install: the Python module was not installed" >&2; exit 1; }
+  echo "== import $MODULE"
+  PYTHONPATH=$(dirname "$MODULE") "$PY" -c "import envpis, envpis_chi2; print('envpis', envpis.__version__, envpis.simd_name())"
+fi
 echo "== test-install: OK"

@@ -1,0 +1,59 @@
+// NumPy argument checking for the bindings: every array argument goes through rows() or one_row(),
+// which convert numbers to C-contiguous float32 and raise ValueError (never crash) for anything else.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+
+namespace envpis_py {
+
+namespace py = pybind11;
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+/// `obj` as float32 numbers: an ndarray or anything numpy.asarray takes (lists, float64, ints).
+/// ValueError for strings, objects, booleans, complex numbers and whatever numpy cannot convert.
+FloatArray as_floats(py::handle obj, const char* name);
+
+/// An N x cols array (N >= 0). With allow_single, a 1-D array of `cols` numbers is one row.
+/// Sets *single to whether it was such a 1-D row.
+FloatArray rows(py::handle obj, const char* name, py::ssize_t cols, bool allow_single = false,
+                bool* single = nullptr);
+
+/// A per-shading-point input for the batched calls: N x cols, or one row (cols numbers, or 1 x cols)
+/// that every point shares. `stride` is set to cols, or to 0 for a shared row.
+struct RowInput {
+  FloatArray array;
+  const float* data = nullptr;
+  py::ssize_t count = 0;  ///< rows given (1 for a shared row)
+  py::ssize_t stride = 0; ///< floats between consecutive points' rows
+  const float* row(std::size_t i) const { return data + i * static_cast<std::size_t>(stride); }
+};
+RowInput row_input(py::handle obj, const char* name, py::ssize_t cols);
+
+/// Fresh float32 arrays for results.
+py::array_t<float> new_array(py::ssize_t n);
+py::array_t<float> new_array(py::ssize_t n, py::ssize_t cols);
+
+/// Applies f(const float* in_row, float* out_row) to every row of an N x in_cols array (or to one
+/// row given as in_cols numbers) with the GIL released. Returns N x out_cols (N for out_cols 1), or
+/// for one row out_cols numbers (a float for out_cols 1).
+template <class F>
+py::object map_rows(py::handle obj, const char* name, py::ssize_t in_cols, py::ssize_t out_cols, F f) {
+  bool single = false;
+  const FloatArray in = rows(obj, name, in_cols, true, &single);
+  const py::ssize_t n = single ? 1 : in.shape(0);
+  py::array_t<float> out = out_cols == 1 ? new_array(n) : new_array(n, out_cols);
+  const float* src = in.data();
+  float* dst = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i) f(src + i * in_cols, dst + i * out_cols);
+  }
+  if (!single) return std::move(out);
+  if (out_cols == 1) return py::float_(dst[0]);
+  return out.reshape({out_cols});
+}
+
+}  // namespace envpis_py

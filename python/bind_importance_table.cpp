@@ -1,0 +1,100 @@
+// ImportanceTable: the two-level table, environment-only sampling and pdf on arrays, and its
+// importance and cell probabilities as arrays (for plots).
+#include <envpis/importance_table.h>
+
+#include "arrays.h"
+#include "module.h"
+
+namespace envpis_py {
+
+namespace {
+
+using envpis::ImportanceTable;
+using envpis::ImportanceTableOptions;
+
+ImportanceTable make_table(const envpis::EnvironmentMap& map, int top_resolution, int fine_resolution,
+                           float floor, float peak_ratio, bool compensated) {
+  ImportanceTableOptions o;
+  o.top_resolution = top_resolution;
+  o.fine_resolution = fine_resolution;
+  o.floor = floor;
+  o.peak_ratio = peak_ratio;
+  o.compensated = compensated;
+  py::gil_scoped_release release;  // the build runs on TBB's threads
+  return ImportanceTable(map, o);
+}
+
+py::array_t<float> importance(const ImportanceTable& t) {
+  const int n = t.fine_resolution();
+  py::array_t<float> out({n, n});
+  float* o = out.mutable_data();
+  py::gil_scoped_release release;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) o[static_cast<std::size_t>(y) * n + x] = t.importance(x, y);
+  return out;
+}
+
+py::array_t<float> cell_probabilities(const ImportanceTable& t) {
+  const int n = t.top_resolution();
+  py::array_t<float> out({n, n});
+  float* o = out.mutable_data();
+  for (int c = 0; c < t.cell_count(); ++c) o[c] = t.cell_probability(c);
+  return out;
+}
+
+}  // namespace
+
+void bind_importance_table(py::module_& m) {
+  const ImportanceTableOptions d;
+  py::class_<ImportanceTable>(m, "ImportanceTable",
+                              "The two-level importance table of a map on the equal-area square "
+                              "(T x T top cells, N x N fine texels). Immutable; safe to share.")
+      .def(py::init(&make_table), py::arg("map"), py::arg("top_resolution") = d.top_resolution,
+           py::arg("fine_resolution") = d.fine_resolution, py::arg("floor") = d.floor,
+           py::arg("peak_ratio") = d.peak_ratio, py::arg("compensated") = d.compensated,
+           "fine_resolution 0: derived from the map's texel count. envpis.Error for invalid options.")
+      .def(
+          "sample",
+          [](const ImportanceTable& t, py::handle u) {
+            bool single = false;
+            const FloatArray in = rows(u, "u", 2, true, &single);
+            const py::ssize_t n = single ? 1 : in.shape(0);
+            py::array_t<float> dirs = new_array(n, 3), pdf = new_array(n);
+            const float* src = in.data();
+            float *dst = dirs.mutable_data(), *p = pdf.mutable_data();
+            {
+              py::gil_scoped_release release;
+              for (py::ssize_t i = 0; i < n; ++i) {
+                const envpis::DirectionSample s = t.sample({src[2 * i], src[2 * i + 1]});
+                dst[3 * i] = s.direction.x, dst[3 * i + 1] = s.direction.y, dst[3 * i + 2] = s.direction.z;
+                p[i] = s.pdf;
+              }
+            }
+            if (single) return py::make_tuple(dirs.reshape({3}), py::float_(p[0]));
+            return py::make_tuple(dirs, pdf);
+          },
+          py::arg("u"),
+          "Environment-only sampling: u (N x 2 in [0,1)) -> (directions N x 3, pdfs N, per solid "
+          "angle; 0 means no sample).")
+      .def(
+          "pdf",
+          [](const ImportanceTable& t, py::handle dirs) {
+            return map_rows(dirs, "dirs", 3, 1, [&t](const float* d, float* p) { *p = t.pdf({d[0], d[1], d[2]}); });
+          },
+          py::arg("dirs"), "Density (solid angle) of sample() at directions (N x 3) -> N.")
+      .def("importance", &importance, "Fine texel importance, N x N on the equal-area square (row = y).")
+      .def("cell_probabilities", &cell_probabilities, "Top cell probabilities E[c], T x T (sum 1).")
+      .def_property_readonly("top_resolution", &ImportanceTable::top_resolution)
+      .def_property_readonly("fine_resolution", &ImportanceTable::fine_resolution)
+      .def_property_readonly("cell_resolution", &ImportanceTable::cell_resolution)
+      .def_property_readonly("cell_count", &ImportanceTable::cell_count)
+      .def_property_readonly("empty", &ImportanceTable::empty)
+      .def_property_readonly("integral", &ImportanceTable::integral)
+      .def_property_readonly("bytes_used", &ImportanceTable::bytes_used)
+      .def("__repr__", [](const ImportanceTable& t) {
+        return "<envpis.ImportanceTable T=" + std::to_string(t.top_resolution()) +
+               " N=" + std::to_string(t.fine_resolution()) + ">";
+      });
+}
+
+}  // namespace envpis_py

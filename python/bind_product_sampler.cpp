@@ -1,0 +1,91 @@
+// ProductSampler and its options: the per-shading-point API (prepare once, then sample / pdf on
+// arrays). The batched calls over many shading points are in batch.cpp.
+#include <envpis/product_sampler.h>
+
+#include "module.h"
+#include "proxy_rows.h"
+
+namespace envpis_py {
+
+namespace {
+
+using envpis::ProductSampler;
+using envpis::ProductSamplerOptions;
+
+envpis::Vec3 vec3(py::handle obj, const char* name) {
+  bool single = false;
+  const FloatArray a = rows(obj, name, 3, true, &single);
+  if (!single && a.shape(0) != 1) throw py::value_error(std::string(name) + " must be 3 numbers");
+  return {a.data()[0], a.data()[1], a.data()[2]};
+}
+
+bool prepare(ProductSampler& s, py::handle n, py::handle wo, py::handle proxy) {
+  const RowInput p = proxy_rows(proxy);
+  if (p.count != 1) throw py::value_error("proxy must be one BsdfProxy or 7 numbers");
+  return s.prepare(vec3(n, "normal"), vec3(wo, "wo"), proxy_from_row(p.row(0)));
+}
+
+py::tuple sample(const ProductSampler& s, py::handle u) {
+  bool single = false;
+  const FloatArray in = rows(u, "u", 2, true, &single);
+  const py::ssize_t n = single ? 1 : in.shape(0);
+  py::array_t<float> dirs = new_array(n, 3), pdf = new_array(n);
+  const float* src = in.data();
+  float *d = dirs.mutable_data(), *p = pdf.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const envpis::DirectionSample r = s.sample({src[2 * i], src[2 * i + 1]});
+      d[3 * i] = r.direction.x, d[3 * i + 1] = r.direction.y, d[3 * i + 2] = r.direction.z;
+      p[i] = r.pdf;
+    }
+  }
+  if (single) return py::make_tuple(dirs.reshape({3}), py::float_(p[0]));
+  return py::make_tuple(dirs, pdf);
+}
+
+py::array_t<float> cell_probabilities(const ProductSampler& s) {
+  const int t = s.table().top_resolution();
+  py::array_t<float> out({t, t});
+  float* o = out.mutable_data();
+  for (int c = 0; c < t * t; ++c) o[c] = s.valid() ? s.cell_probability(c) : 0.0f;
+  return out;
+}
+
+}  // namespace
+
+void bind_product_sampler(py::module_& m) {
+  const ProductSamplerOptions d;
+  py::class_<ProductSamplerOptions>(m, "ProductSamplerOptions", "Options of the product sampler (product_sampler.h).")
+      .def(py::init<>())
+      .def_readwrite("proxy", &ProductSamplerOptions::proxy)
+      .def_readwrite("env_mix", &ProductSamplerOptions::env_mix,
+                     "fraction of the environment-only distribution mixed in, [0, 1]")
+      .def_readwrite("env_floor", &ProductSamplerOptions::env_floor,
+                     "every cell the proxy sees keeps at least this times its environment share, [0, 1]")
+      .def_readwrite("simd", &ProductSamplerOptions::simd, "False: the scalar reference kernel");
+
+  py::class_<ProductSampler>(m, "ProductSampler",
+                             "Product (environment x BSDF proxy) sampling at one shading point: prepare(), "
+                             "then sample() / pdf() any number of times. Keeps its table alive.")
+      .def(py::init<const envpis::ImportanceTable&, const ProductSamplerOptions&>(), py::arg("table"),
+           py::arg("options") = d, py::keep_alive<1, 2>())
+      .def("prepare", &prepare, py::arg("normal"), py::arg("wo"), py::arg("proxy"),
+           "Builds the product distribution for a shading point (normal, outgoing direction wo, proxy: "
+           "a BsdfProxy or 7 numbers). Returns valid: False for a zero/NaN normal or wo or an empty table.")
+      .def("sample", &sample, py::arg("u"),
+           "u (N x 2 in [0,1), or 2 numbers) -> (directions N x 3, pdfs N); pdf 0 means no sample.")
+      .def(
+          "pdf",
+          [](const ProductSampler& s, py::handle dirs) {
+            return map_rows(dirs, "dirs", 3, 1, [&s](const float* v, float* p) { *p = s.pdf({v[0], v[1], v[2]}); });
+          },
+          py::arg("dirs"), "Density (solid angle) of sample() at directions (N x 3, or 3 numbers).")
+      .def("cell_probabilities", &cell_probabilities,
+           "The prepared top-level distribution, T x T (sums to 1; zeros when not valid).")
+      .def_property_readonly("valid", &ProductSampler::valid)
+      .def_property_readonly("uses_environment_fallback", &ProductSampler::uses_environment_fallback)
+      .def_property_readonly("options", &ProductSampler::options);
+}
+
+}  // namespace envpis_py
