@@ -65,6 +65,17 @@ RenderOptions small_options(Strategy s, int spp, std::uint64_t seed) {
   return o;
 }
 
+// A quick render with the renderer's defaults and a small oracle.
+RenderResult render_small(const Scene& s, Strategy st, int spp, int width, int height) {
+  RenderOptions o;
+  o.strategy = st;
+  o.spp = spp;
+  o.width = width;
+  o.height = height;
+  o.oracle.resolution = 8;
+  return render(s, o);
+}
+
 bool all_finite(const RenderResult& r) {
   for (float v : r.rgb)
     if (!std::isfinite(v)) return false;
@@ -475,13 +486,7 @@ TEST(SceneFile, ShippedScenesLoadAndRender) {
     const Scene s = load_scene_file(entry.path().string(), test_sky());
     EXPECT_GE(s.objects().size(), 3u) << entry.path();
     for (Strategy st : all_strategies()) {
-      RenderOptions o;
-      o.strategy = st;
-      o.spp = 1;
-      o.width = 32;
-      o.height = 8;
-      o.oracle.resolution = 8;
-      const RenderResult r = render(s, o);
+      const RenderResult r = render_small(s, st, 1, 32, 8);
       EXPECT_EQ(r.nonfinite_pixels, 0u) << entry.path() << " " << to_string(st);
     }
   }
@@ -542,13 +547,7 @@ TEST(SceneFile, OrthographicCameraRenders) {
   EXPECT_EQ(s.camera().projection, Projection::Orthographic);
   EXPECT_EQ(s.camera().ortho_height, 4.0f);
   for (Strategy st : all_strategies()) {
-    RenderOptions o;
-    o.strategy = st;
-    o.spp = 2;
-    o.width = 96;
-    o.height = 64;
-    o.oracle.resolution = 8;
-    const RenderResult r = render(s, o);
+    const RenderResult r = render_small(s, st, 2, 96, 64);
     EXPECT_EQ(r.nonfinite_pixels, 0u) << to_string(st);
     EXPECT_TRUE(all_finite(r)) << to_string(st);
     if (st != Strategy::Bsdf) continue;
