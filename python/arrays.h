@@ -7,6 +7,8 @@
 
 #include <cstddef>
 
+#include "envpis/common.h"
+
 namespace envpis_py {
 
 namespace py = pybind11;
@@ -54,6 +56,28 @@ py::object map_rows(py::handle obj, const char* name, py::ssize_t in_cols, py::s
   if (!single) return std::move(out);
   if (out_cols == 1) return py::float_(dst[0]);
   return out.reshape({out_cols});
+}
+
+/// Draws one direction per row of u (N x 2, or one pair) with sample(Point2) -> DirectionSample, the
+/// GIL released. Returns (N x 3 directions, N pdfs), or (3 numbers, a float) for one pair.
+template <class Sample>
+py::tuple sample_rows(py::handle u, Sample sample) {
+  bool single = false;
+  const FloatArray in = rows(u, "u", 2, true, &single);
+  const py::ssize_t n = single ? 1 : in.shape(0);
+  py::array_t<float> dirs = new_array(n, 3), pdf = new_array(n);
+  const float* src = in.data();
+  float *d = dirs.mutable_data(), *p = pdf.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (py::ssize_t i = 0; i < n; ++i) {
+      const envpis::DirectionSample r = sample(envpis::Point2{src[2 * i], src[2 * i + 1]});
+      d[3 * i] = r.direction.x, d[3 * i + 1] = r.direction.y, d[3 * i + 2] = r.direction.z;
+      p[i] = r.pdf;
+    }
+  }
+  if (single) return py::make_tuple(dirs.reshape({3}), py::float_(p[0]));
+  return py::make_tuple(dirs, pdf);
 }
 
 }  // namespace envpis_py

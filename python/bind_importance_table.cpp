@@ -56,22 +56,7 @@ void bind_importance_table(py::module_& m) {
       .def(
           "sample",
           [](const ImportanceTable& t, py::handle u) {
-            bool single = false;
-            const FloatArray in = rows(u, "u", 2, true, &single);
-            const py::ssize_t n = single ? 1 : in.shape(0);
-            py::array_t<float> dirs = new_array(n, 3), pdf = new_array(n);
-            const float* src = in.data();
-            float *dst = dirs.mutable_data(), *p = pdf.mutable_data();
-            {
-              py::gil_scoped_release release;
-              for (py::ssize_t i = 0; i < n; ++i) {
-                const envpis::DirectionSample s = t.sample({src[2 * i], src[2 * i + 1]});
-                dst[3 * i] = s.direction.x, dst[3 * i + 1] = s.direction.y, dst[3 * i + 2] = s.direction.z;
-                p[i] = s.pdf;
-              }
-            }
-            if (single) return py::make_tuple(dirs.reshape({3}), py::float_(p[0]));
-            return py::make_tuple(dirs, pdf);
+            return sample_rows(u, [&](envpis::Point2 p) { return t.sample(p); });
           },
           py::arg("u"),
           "Environment-only sampling: u (N x 2 in [0,1)) -> (directions N x 3, pdfs N, per solid "

@@ -26,22 +26,7 @@ bool prepare(ProductSampler& s, py::handle n, py::handle wo, py::handle proxy) {
 }
 
 py::tuple sample(const ProductSampler& s, py::handle u) {
-  bool single = false;
-  const FloatArray in = rows(u, "u", 2, true, &single);
-  const py::ssize_t n = single ? 1 : in.shape(0);
-  py::array_t<float> dirs = new_array(n, 3), pdf = new_array(n);
-  const float* src = in.data();
-  float *d = dirs.mutable_data(), *p = pdf.mutable_data();
-  {
-    py::gil_scoped_release release;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      const envpis::DirectionSample r = s.sample({src[2 * i], src[2 * i + 1]});
-      d[3 * i] = r.direction.x, d[3 * i + 1] = r.direction.y, d[3 * i + 2] = r.direction.z;
-      p[i] = r.pdf;
-    }
-  }
-  if (single) return py::make_tuple(dirs.reshape({3}), py::float_(p[0]));
-  return py::make_tuple(dirs, pdf);
+  return sample_rows(u, [&](envpis::Point2 p) { return s.sample(p); });
 }
 
 py::array_t<float> cell_probabilities(const ProductSampler& s) {
