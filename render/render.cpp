@@ -38,11 +38,7 @@ void validate(const RenderOptions& o) {
   if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
   const ImportanceTableOptions& lt = o.light_table;
-  if (lt.top_resolution < 1 || lt.top_resolution > 256)
-    throw Error("top resolution must be in 1..256, got " + std::to_string(lt.top_resolution));
-  if (lt.fine_resolution < 0 || lt.fine_resolution > 16384) throw Error("fine resolution must be in 0..16384");
-  if (!(lt.peak_ratio == 0 || (lt.peak_ratio >= 1 && lt.peak_ratio <= 1e6f)))
-    throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
+  envpis::validate(lt);
   if (o.tables && o.tables->table &&
       (o.tables->light_table.peak_ratio != lt.peak_ratio || o.tables->light_table.fine_resolution != lt.fine_resolution))
     throw Error("prebuilt tables have other light table options");

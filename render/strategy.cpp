@@ -54,8 +54,7 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
       throw Error("oracle directions per cell must be a square number in 1..256, got " +
                   std::to_string(oracle.directions));
   }
-  if (light_table.top_resolution < 1 || light_table.top_resolution > 256)
-    throw Error("light table top resolution must be in 1..256, got " + std::to_string(light_table.top_resolution));
+  envpis::validate(light_table);
   t.light_table = light_table;
   t.light_table.compensated = false;
   ImportanceTableOptions opt = t.light_table;

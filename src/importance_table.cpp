@@ -24,8 +24,7 @@ constexpr int kMaxFine = 16384;
 constexpr int kAutoFineCap = 2904;  // the automatic N of a 4096 x 2048 map: 67 MB of table
 }  // namespace
 
-ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
+void validate(const ImportanceTableOptions& options) {
   if (options.top_resolution < 1 || options.top_resolution > kMaxTop)
     throw Error("top-level resolution must be in 1.." + std::to_string(kMaxTop) + ", got " +
                 std::to_string(options.top_resolution));
@@ -35,6 +34,11 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     throw Error("importance floor must be in [0, 1)");
   if (!(options.peak_ratio == 0.0f || (options.peak_ratio >= 1.0f && options.peak_ratio <= 1e6f)))
     throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
+}
+
+ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate(options);
   T_ = options.top_resolution;
   int n = options.fine_resolution;
   if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)

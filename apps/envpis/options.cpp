@@ -33,6 +33,12 @@ double parse_number_in(const std::string& option, const std::string& text, doubl
   return v;
 }
 
+float parse_peak_ratio(const std::string& text) {
+  const float k = static_cast<float>(parse_number_in("--peak-ratio", text, 0, 1e6, "0 (off) or in [1, 1e6]"));
+  if (k > 0 && k < 1) throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + text + "'");
+  return k;
+}
+
 long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi) {
   const char* s = text.c_str();
   char* end = nullptr;
@@ -142,11 +148,7 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   o.threads = static_cast<int>(parse_integer("--threads", threads, 0, 4096));
   o.light_table.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
   o.light_table.fine_resolution = static_cast<int>(parse_integer("--fine", fine, 0, 16384));
-  if (!peak_ratio.empty()) {
-    float& k = o.light_table.peak_ratio;
-    k = static_cast<float>(parse_number_in("--peak-ratio", peak_ratio, 0, 1e6, "0 (off) or in [1, 1e6]"));
-    if (k > 0 && k < 1) throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + peak_ratio + "'");
-  }
+  if (!peak_ratio.empty()) o.light_table.peak_ratio = parse_peak_ratio(peak_ratio);
   o.oracle.resolution = static_cast<int>(parse_integer("--oracle-res", oracle_res, 1, 256));
   o.oracle.directions = static_cast<int>(parse_integer("--oracle-dirs", oracle_dirs, 1, 256));
   const int k = static_cast<int>(std::lround(std::sqrt(double(o.oracle.directions))));

@@ -21,6 +21,8 @@ namespace envpis::app {
 double parse_number(const std::string& option, const std::string& text);
 /// A finite number in [lo, hi]; `range` describes the interval in the message ("in [0, 1]", ">= 0").
 double parse_number_in(const std::string& option, const std::string& text, double lo, double hi, const char* range);
+/// --peak-ratio: 0 (the bound off) or a number in [1, 1e6].
+float parse_peak_ratio(const std::string& text);
 /// A decimal integer in lo..hi.
 long long parse_integer(const std::string& option, const std::string& text, long long lo, long long hi);
 std::string lower(std::string s);

@@ -344,9 +344,7 @@ void run_table(const TableArgs& a) {
   ImportanceTableOptions table_options;
   table_options.top_resolution = int(parse_integer("--top", a.top, 1, 256));
   table_options.fine_resolution = int(parse_integer("--fine", a.fine, 0, 16384));
-  table_options.peak_ratio = float(parse_number_in("--peak-ratio", a.peak_ratio, 0, 1e6, "0 (off) or in [1, 1e6]"));
-  if (table_options.peak_ratio > 0 && table_options.peak_ratio < 1)
-    throw Error("--peak-ratio: must be 0 (off) or in [1, 1e6], got '" + a.peak_ratio + "'");
+  table_options.peak_ratio = parse_peak_ratio(a.peak_ratio);
   const Vec3 normal = parse_vec3("--normal", a.normal);
   const Vec3 wo = parse_vec3("--wo", a.wo);
   const BsdfProxy proxy = parse_proxy(a.proxy);

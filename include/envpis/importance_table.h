@@ -55,6 +55,10 @@ struct ImportanceTableOptions {
   bool compensated = false;
 };
 
+/// Throws Error naming the first invalid option (what the ImportanceTable constructor checks), so
+/// callers can reject options before any map is loaded.
+void validate(const ImportanceTableOptions& options);
+
 /// A bounding cone: every direction d of the cell has dot(d, axis) >= cos_half_angle.
 struct Cone {
   Vec3 axis;
