@@ -271,14 +271,7 @@ TEST(FireflyLogCommand, RenderAndCompareWriteCsvAndRejectBadValues) {
       {"compare " + compare + "--firefly-log " + out, "is not a directory"},
   };
   std::ofstream(out) << "x";  // an existing file, for compare's "not a directory"
-  std::vector<std::string> args;
-  for (const auto& b : bad) args.push_back(b.first);
-  const std::vector<test::CmdResult> results = test::run_envpis_all(args, 2);
-  for (std::size_t i = 0; i < bad.size(); ++i) {
-    EXPECT_EQ(results[i].code, 1) << bad[i].first << ": " << results[i].output;
-    EXPECT_NE(results[i].output.find(bad[i].second), std::string::npos) << bad[i].first << ": " << results[i].output;
-    EXPECT_EQ(std::count(results[i].output.begin(), results[i].output.end(), '\n'), 1) << bad[i].first;
-  }
+  test::expect_one_line_errors(bad, 2);
 
   const std::string header = "x,y,sample,depth,object,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight";
   const auto ok = test::run_envpis_all(
