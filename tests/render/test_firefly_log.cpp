@@ -21,6 +21,7 @@
 #include <string>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include "render/render.h"
 #include "render/scenes.h"
 #include "stress_maps.h"
@@ -227,14 +228,7 @@ TEST(FireflyLog, PerPixelThresholdsAndValidation) {
 
 // ------------------------------------------------------------------------------------------ command
 
-struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("envpis-firefly-test-" + std::to_string(::getpid()));
-  TempDir() { fs::create_directories(path); }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using test::TempDir;
 
 std::string first_line(const std::string& path) {
   std::ifstream in(path);

@@ -23,6 +23,7 @@
 #include <string>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include "render/render.h"
 #include "render/sampler.h"
 #include "render/scenes.h"
@@ -388,22 +389,7 @@ TEST(ClosedSurfaces, ProductLightSamplesOfTheGlassSphereStayOutside) {
 // ---------------------------------------------------------------------------------------------
 // Scene files
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("envpis-render-test-" + std::to_string(::getpid()));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = path / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
-};
+using test::TempDir;
 
 const char* kObj =
     "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
