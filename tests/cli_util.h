@@ -1,12 +1,15 @@
 // Running the built `envpis` command from tests: exit status and combined output, several commands at
-// once (the command's start-up, loading OpenImageIO's many shared libraries, dominates short runs).
+// once (the command's start-up, loading OpenImageIO's many shared libraries, dominates short runs), and
+// the check that a bad command line fails with one line "envpis CMD: error: ...".
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace envpis::test {
@@ -62,6 +65,28 @@ inline std::string line_starting(const std::string& output, const std::string& p
   if (at == std::string::npos) return {};
   const std::size_t nl = output.find('\n', at);
   return output.substr(at, nl == std::string::npos ? std::string::npos : nl - at + 1);
+}
+
+/// Exit 1 and exactly one output line: "envpis CMD: error: ..." containing `expect`.
+inline void expect_one_line_error(const std::string& cmd, const std::string& args, const CmdResult& r,
+                                  const std::string& expect) {
+  EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
+  const std::string line = line_starting(r.output, "envpis " + cmd + ": error: ");
+  EXPECT_NE(line.find(expect), std::string::npos) << args << "\nexpected: " << expect << "\ngot: " << r.output;
+  EXPECT_EQ(r.output, line) << args << ": more than the one error line";
+}
+
+/// Runs every (command line, expected text) at once, `parallel` at a time; each must be a one-line
+/// error of its command (the first word of its command line).
+inline void expect_one_line_errors(const std::vector<std::pair<std::string, std::string>>& cases,
+                                   std::size_t parallel = 4) {
+  std::vector<std::string> args;
+  for (const auto& c : cases) args.push_back(c.first);
+  const std::vector<CmdResult> r = run_envpis_all(args, parallel);
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string cmd = cases[i].first.substr(0, cases[i].first.find(' '));
+    expect_one_line_error(cmd, args[i], r[i], cases[i].second);
+  }
 }
 
 }  // namespace envpis::test

@@ -32,6 +32,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using envpis::test::CmdResult;
+using envpis::test::expect_one_line_error;
+using envpis::test::expect_one_line_errors;
 using envpis::test::line_starting;
 using envpis::test::run_envpis_all;
 using envpis::test::shell_quote;
@@ -173,26 +175,6 @@ std::string command_line(const std::string& cmd, const std::string& env, const s
          " --width 16 --height 4 --spp 2 --ref-spp 4 --strategies mis,product --repeats 1 --no-convergence "
          "--no-plots --no-cache --quiet --out " +
          shell_quote(out) + extra;
-}
-
-// Exit 1 and exactly one output line: "envpis CMD: error: ..." containing `expect`.
-void expect_one_line_error(const std::string& cmd, const std::string& args, const CmdResult& r,
-                           const std::string& expect) {
-  EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
-  const std::string line = line_starting(r.output, "envpis " + cmd + ": error: ");
-  EXPECT_NE(line.find(expect), std::string::npos) << args << "\nexpected: " << expect << "\ngot: " << r.output;
-  EXPECT_EQ(r.output, line) << args << ": more than the one error line";
-}
-
-// Runs every (command line, expected text) at once; each must be a one-line error of its command.
-void expect_one_line_errors(const std::vector<std::pair<std::string, std::string>>& cases) {
-  std::vector<std::string> args;
-  for (const auto& c : cases) args.push_back(c.first);
-  const std::vector<CmdResult> r = run_envpis_all(args);
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const std::string cmd = cases[i].first.substr(0, cases[i].first.find(' '));
-    expect_one_line_error(cmd, args[i], r[i], cases[i].second);
-  }
 }
 
 bool all_finite_nonnegative(const std::vector<float>& v) {

@@ -25,16 +25,22 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-const std::string kEnvpis = std::string(ENVPIS_BINARY_DIR) + "/apps/envpis/envpis";
-const std::string kReportDir = fs::path(ENVPIS_TEST_DATA).parent_path().parent_path().string() + "/report";
+const std::string kReportDir = std::string(ENVPIS_SOURCE_DIR) + "/report";
 
 using envpis::test::CmdResult;
 
 // `args` starts with "compare"; the report templates come from the source tree.
-CmdResult run(const std::string& args) {
+std::string with_report_dir(const std::string& args) {
   const std::string rest = args.size() > 7 ? args.substr(7) : std::string();
-  return envpis::test::run_envpis("compare --report-dir " + envpis::test::shell_quote(kReportDir) + rest);
+  return "compare --report-dir " + envpis::test::shell_quote(kReportDir) + rest;
 }
+
+std::vector<std::pair<std::string, std::string>> with_report_dir(std::vector<std::pair<std::string, std::string>> cases) {
+  for (auto& c : cases) c.first = with_report_dir(c.first);
+  return cases;
+}
+
+CmdResult run(const std::string& args) { return envpis::test::run_envpis(with_report_dir(args)); }
 
 std::vector<float> read_rgb(const fs::path& path, int* w, int* h, int channels = 3) {
   auto in = OIIO::ImageInput::open(path.string());
@@ -107,7 +113,8 @@ double median_of(std::vector<double> v) {
 class CompareCommand : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!fs::exists(kEnvpis)) GTEST_SKIP() << "the envpis command is not built (" << kEnvpis << ")";
+    if (!fs::exists(envpis::test::envpis_binary()))
+      GTEST_SKIP() << "the envpis command is not built (" << envpis::test::envpis_binary() << ")";
   }
 };
 
@@ -139,14 +146,7 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
-  for (const auto& [args, needle] : cases) {
-    const CmdResult r = run(args);
-    EXPECT_EQ(r.code, 1) << args << "\n" << r.output;
-    EXPECT_NE(r.output.find("envpis compare: error: "), std::string::npos) << args << "\n" << r.output;
-    EXPECT_NE(r.output.find(needle), std::string::npos) << args << "\n" << r.output;
-    // One line: the message and its newline, nothing else.
-    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n" << r.output;
-  }
+  envpis::test::expect_one_line_errors(with_report_dir(cases));
   std::error_code ec;
   fs::remove_all(out, ec);
 }

@@ -15,19 +15,11 @@ using namespace envpis::test;
 namespace {
 
 Chi2Result env_chi2(const ImportanceTable& table, std::uint64_t seed, int tests = 1, std::size_t samples = 300000) {
-  Chi2Options opt;
-  opt.bins = aligned_bins(table.fine_resolution());
-  opt.sub = table.fine_resolution() / opt.bins;
+  Chi2Options opt = table_aligned(table.fine_resolution());
   opt.samples = samples;
   opt.seed = seed;
   opt.test_count = tests;
-  return chi2_test(
-      [&](float a, float b) -> std::optional<Vec3> {
-        const DirectionSample s = table.sample({a, b});
-        if (s.pdf <= 0) return std::nullopt;
-        return s.direction;
-      },
-      [&](Vec3 d) { return double(table.pdf(d)); }, opt);
+  return sampler_chi2(table, opt);
 }
 
 /// Stratified Monte Carlo estimate of the integral of pdf over the sphere.

@@ -62,20 +62,11 @@ std::vector<Config> random_configs(int count, std::uint64_t seed) {
 }
 
 Chi2Result product_chi2(const ProductSampler& ps, std::uint64_t seed, int tests, std::size_t samples = 100000) {
-  const int N = ps.table().fine_resolution();
-  Chi2Options opt;
-  opt.bins = aligned_bins(N);
-  opt.sub = N / opt.bins;
+  Chi2Options opt = table_aligned(ps.table().fine_resolution());
   opt.samples = samples;
   opt.seed = seed;
   opt.test_count = tests;
-  return chi2_test(
-      [&](float a, float b) -> std::optional<Vec3> {
-        const DirectionSample s = ps.sample({a, b});
-        if (s.pdf <= 0) return std::nullopt;
-        return s.direction;
-      },
-      [&](Vec3 d) { return double(ps.pdf(d)); }, opt);
+  return sampler_chi2(ps, opt);
 }
 
 std::vector<std::pair<std::string, std::shared_ptr<ImportanceTable>>> test_tables() {

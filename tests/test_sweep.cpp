@@ -54,13 +54,7 @@ TEST(Sweep, ProductSamplerChiSquareOver1000Configurations) {
     c.samples = 40000;
     c.seed = 5000 + k;
     c.test_count = count;
-    const auto r = chi2_test(
-        [&](float a, float b) -> std::optional<Vec3> {
-          const DirectionSample s = ps.sample({a, b});
-          if (s.pdf <= 0) return std::nullopt;
-          return s.direction;
-        },
-        [&](Vec3 d) { return double(ps.pdf(d)); }, c);
+    const auto r = sampler_chi2(ps, c);
     pvalues.push_back(r.p_value);
     passed += r.passed;
     EXPECT_TRUE(r.passed) << maps[m].first << " config " << k << ": " << r.message;

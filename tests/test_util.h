@@ -1,10 +1,14 @@
-// Shared helpers for the tests: synthetic maps, the blender-data maps, a fixed-seed RNG.
+// Shared helpers for the tests: synthetic maps, the blender-data maps, a fixed-seed RNG, a scratch
+// directory.
 #pragma once
+
+#include <unistd.h>
 
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -57,6 +61,31 @@ inline EnvironmentMap synthetic_sky(int w = 256, int h = 128) {
     return v;
   });
 }
+
+/// A fresh directory under the system's temporary directory (one per object: the process id and a
+/// counter name it), removed with everything in it when the object goes.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    static int count = 0;
+    path = std::filesystem::temp_directory_path() /
+           ("envpis-test-" + std::to_string(::getpid()) + "-" + std::to_string(count++));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  /// Writes `text` to the file `name` in the directory; returns its path.
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::filesystem::path p = path / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+};
 
 /// Uniform random unit vector.
 inline Vec3 random_direction(std::mt19937_64& rng) {

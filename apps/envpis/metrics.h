@@ -1,6 +1,6 @@
 // Image error metrics of `envpis compare`: an image against the reference, over the whole image and over
-// each object's pixels (DESIGN.md section 5). Every metric derives from one per-pixel quantity, the
-// relative squared error e = mean over the three channels of (I - R)^2 / (R^2 + 0.01):
+// each object's pixels (docs/cli.md, "envpis compare", Method). Every metric derives from one per-pixel
+// quantity, the relative squared error e = mean over the three channels of (I - R)^2 / (R^2 + 0.01):
 //   relMSE            mean of e over the pixels, with its standard error from the spread of e,
 //   max_rel_sq_error  the largest e (the worst pixel: a firefly, or a blotch of bias),
 //   pixels_over_10x   how many pixels have e > 100, i.e. are "more than 10x off" (for a grey pixel:

@@ -21,6 +21,7 @@
 #include <string>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include "render/render.h"
 #include "render/scenes.h"
 #include "stress_maps.h"
@@ -227,14 +228,7 @@ TEST(FireflyLog, PerPixelThresholdsAndValidation) {
 
 // ------------------------------------------------------------------------------------------ command
 
-struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("envpis-firefly-test-" + std::to_string(::getpid()));
-  TempDir() { fs::create_directories(path); }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using test::TempDir;
 
 std::string first_line(const std::string& path) {
   std::ifstream in(path);
@@ -271,14 +265,7 @@ TEST(FireflyLogCommand, RenderAndCompareWriteCsvAndRejectBadValues) {
       {"compare " + compare + "--firefly-log " + out, "is not a directory"},
   };
   std::ofstream(out) << "x";  // an existing file, for compare's "not a directory"
-  std::vector<std::string> args;
-  for (const auto& b : bad) args.push_back(b.first);
-  const std::vector<test::CmdResult> results = test::run_envpis_all(args, 2);
-  for (std::size_t i = 0; i < bad.size(); ++i) {
-    EXPECT_EQ(results[i].code, 1) << bad[i].first << ": " << results[i].output;
-    EXPECT_NE(results[i].output.find(bad[i].second), std::string::npos) << bad[i].first << ": " << results[i].output;
-    EXPECT_EQ(std::count(results[i].output.begin(), results[i].output.end(), '\n'), 1) << bad[i].first;
-  }
+  test::expect_one_line_errors(bad, 2);
 
   const std::string header = "x,y,sample,depth,object,technique,contribution,threshold,light_pdf,bsdf_pdf,mis_weight";
   const auto ok = test::run_envpis_all(

@@ -22,6 +22,8 @@
 #include <memory>
 #include <string>
 
+#include "cli_util.h"
+#include "test_util.h"
 #include "render/render.h"
 #include "render/sampler.h"
 #include "render/scenes.h"
@@ -387,22 +389,7 @@ TEST(ClosedSurfaces, ProductLightSamplesOfTheGlassSphereStayOutside) {
 // ---------------------------------------------------------------------------------------------
 // Scene files
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() / ("envpis-render-test-" + std::to_string(::getpid()));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = path / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
-};
+using test::TempDir;
 
 const char* kObj =
     "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
@@ -477,7 +464,7 @@ TEST(SceneFile, LoadsSpheresObjPlyAndProceduralMeshes) {
 // The JSON scenes in scenes/ (used by the measurements in BENCHMARKS.md) load, and every strategy
 // renders them, with the path integrator, to a finite image.
 TEST(SceneFile, ShippedScenesLoadAndRender) {
-  const fs::path dir = fs::path(ENVPIS_TEST_DATA).parent_path().parent_path() / "scenes";  // tests/data -> repo
+  const fs::path dir = fs::path(ENVPIS_SOURCE_DIR) / "scenes";
   ASSERT_TRUE(fs::is_directory(dir)) << dir;
   int count = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
@@ -667,26 +654,8 @@ TEST(SceneFile, CleanErrorsForBadFilesAndFields) {
 // ---------------------------------------------------------------------------------------------
 // The command's validation (one-line error, exit status 1).
 
-struct CommandResult {
-  int status = -1;
-  std::string output;
-};
-
-CommandResult run_envpis(const std::string& args) {
-  const std::string exe = std::string(ENVPIS_BINARY_DIR) + "/apps/envpis/envpis";
-  CommandResult r;
-  if (!fs::exists(exe)) return r;
-  const std::string cmd = exe + " render " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  char buf[512];
-  while (fgets(buf, sizeof buf, p)) r.output += buf;
-  const int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
 TEST(Command, RejectsBadOptionsWithOneLineErrors) {
-  if (!fs::exists(std::string(ENVPIS_BINARY_DIR) + "/apps/envpis/envpis")) GTEST_SKIP() << "envpis not built";
+  if (!fs::exists(test::envpis_binary())) GTEST_SKIP() << "envpis not built";
   TempDir dir;
   const std::string out = (dir.path / "o.exr").string();
   const std::vector<std::pair<std::string, std::string>> cases{
@@ -712,15 +681,13 @@ TEST(Command, RejectsBadOptionsWithOneLineErrors) {
       {"--env x.exr --env-orientation mirrored --out " + out, "--env-orientation: unknown lat-long orientation"},
       {"--env x.exr --env-filter cubic --out " + out, "--env-filter: unknown map filter 'cubic'"},
   };
-  for (const auto& [args, expect] : cases) {
-    const CommandResult r = run_envpis(args);
-    EXPECT_EQ(r.status, 1) << args << ": " << r.output;
-    EXPECT_NE(r.output.find(expect), std::string::npos) << args << ": " << r.output;
-    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
-  }
+  std::vector<std::pair<std::string, std::string>> render_cases;
+  for (const auto& [args, expect] : cases) render_cases.emplace_back("render " + args, expect);
+  test::expect_one_line_errors(render_cases);
   // And a tiny successful render.
-  const CommandResult ok = run_envpis("--scene fig1 --width 48 --height 8 --spp 2 --strategy product --out " + out);
-  EXPECT_EQ(ok.status, 0) << ok.output;
+  const test::CmdResult ok =
+      test::run_envpis("render --scene fig1 --width 48 --height 8 --spp 2 --strategy product --out " + out);
+  EXPECT_EQ(ok.code, 0) << ok.output;
   EXPECT_NE(ok.output.find("samples/s"), std::string::npos);
   EXPECT_TRUE(fs::exists(out));
 }

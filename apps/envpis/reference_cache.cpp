@@ -1,0 +1,164 @@
+#ifdef ENVPIS_HAVE_RENDER
+#include "reference_cache.h"
+
+#include <OpenImageIO/imageio.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "render/scenes.h"
+
+namespace envpis::app {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using namespace envpis::render;
+
+std::string fnv1a_hex(const std::string& s) {
+  std::uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string cache_base(const std::string& dir, const json& key) {
+  return (fs::path(dir) / ("ref-" + fnv1a_hex(key.dump()))).string();
+}
+
+/// A file by its canonical path, size and modification time: an edited scene or map is another key.
+json file_identity(const std::string& path) {
+  std::error_code ec;
+  const fs::path canon = fs::weakly_canonical(fs::path(path), ec);
+  struct stat st {};
+  json j;
+  j["path"] = ec ? path : canon.string();
+  if (::stat(path.c_str(), &st) == 0) {
+    j["size"] = static_cast<std::uint64_t>(st.st_size);
+    j["mtime"] = static_cast<std::int64_t>(st.st_mtime);
+  }
+  return j;
+}
+
+/// The options of `strategy` that change its image (each only for the strategies that use it).
+void put_strategy_options(json& key, const Scene& scene, const RenderOptions& base, Strategy strategy) {
+  if (strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
+  if (strategy != Strategy::Bsdf && strategy != Strategy::Oracle) key["top"] = base.light_table.top_resolution;
+  if (strategy != Strategy::Bsdf) {
+    key["peak_ratio"] = base.light_table.peak_ratio;
+    key["fine"] = base.light_table.fine_resolution;
+  }
+  if ((strategy == Strategy::Product || strategy == Strategy::Oracle) && !scene.proxy_closed_surfaces())
+    key["closed_surfaces"] = false;
+  if (strategy == Strategy::Product)
+    key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
+                      base.product.proxy.max_alpha, base.product.env_mix, base.product.env_floor};
+}
+
+}  // namespace
+
+json reference_key(const SceneOptionArgs& common, const Scene& scene, const RenderOptions& base, Strategy strategy,
+                   int spp, std::uint64_t seed) {
+  json key;
+  key["version"] = kVersion;
+  key["scene"] = is_builtin_scene(common.scene) ? json(common.scene) : file_identity(common.scene);
+  key["environment"] = common.env.empty() ? json(scene.environment_description()) : file_identity(common.env);
+  if (!common.env.empty()) key["environment_transform"] = {common.env_rotation, common.env_scale};
+  // How the map is read changes the image whichever map it is (--env or the scene's), and references
+  // cached before the lat-long orientation became an option have no such entry: they do not match.
+  if (scene.has_environment())
+    key["environment_lookup"] = {to_string(scene.environment().orientation()), to_string(scene.environment().filter())};
+  key["width"] = base.width;
+  key["height"] = base.height;
+  key["integrator"] = to_string(base.integrator);
+  key["max_depth"] = base.integrator == IntegratorKind::Path ? base.max_depth : 1;
+  key["heuristic"] = to_string(base.heuristic);
+  key["sampler"] = to_string(base.sampler);
+  key["strategy"] = to_string(strategy);
+  key["spp"] = spp;
+  key["seed"] = seed;
+  put_strategy_options(key, scene, base, strategy);
+  return key;
+}
+
+std::string default_cache_dir() {
+  if (const char* e = std::getenv("ENVPIS_CACHE_DIR"); e && *e) return e;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return (fs::path(x) / "envpis" / "references").string();
+  if (const char* h = std::getenv("HOME"); h && *h) return (fs::path(h) / ".cache" / "envpis" / "references").string();
+  return "";
+}
+
+std::optional<Reference> load_cached_reference(const std::string& dir, const json& key) {
+  const std::string base = cache_base(dir, key);
+  std::ifstream in(base + ".json");
+  if (!in) return std::nullopt;
+  json side;
+  try {
+    in >> side;
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (!side.contains("key") || side["key"] != key) return std::nullopt;
+  auto img = OIIO::ImageInput::open(base + ".exr");
+  if (!img) return std::nullopt;
+  const OIIO::ImageSpec& spec = img->spec();
+  const int W = key["width"].get<int>(), H = key["height"].get<int>();
+  if (spec.width != W || spec.height != H || spec.nchannels != 4) return std::nullopt;
+  std::vector<float> px(static_cast<std::size_t>(W) * H * 4);
+  if (!img->read_image(0, 0, 0, 4, OIIO::TypeDesc::FLOAT, px.data())) return std::nullopt;
+  Reference r;
+  r.width = W;
+  r.height = H;
+  r.spp = key["spp"].get<int>();
+  r.seed = key["seed"].get<std::uint64_t>();
+  r.seconds = side.value("seconds", 0.0);
+  r.cached = true;
+  const std::size_t npix = static_cast<std::size_t>(W) * H;
+  r.rgb.resize(npix * 3);
+  r.variance.resize(npix);
+  for (std::size_t p = 0; p < npix; ++p) {
+    for (int c = 0; c < 3; ++c) r.rgb[p * 3 + c] = px[p * 4 + c];
+    r.variance[p] = px[p * 4 + 3];
+  }
+  return r;
+}
+
+void store_cached_reference(const std::string& dir, const json& key, const Reference& r) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error("cannot create cache directory '" + dir + "': " + ec.message());
+  const std::string base = cache_base(dir, key);
+  const std::string tmp = base + ".tmp." + std::to_string(::getpid()) + ".exr";
+  auto out = OIIO::ImageOutput::create(tmp);
+  if (!out) throw Error("cannot write '" + tmp + "': " + OIIO::geterror());
+  OIIO::ImageSpec spec(r.width, r.height, 4, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"R", "G", "B", "variance"};
+  spec.alpha_channel = -1;
+  spec.attribute("compression", "zip");
+  const std::size_t npix = static_cast<std::size_t>(r.width) * r.height;
+  std::vector<float> px(npix * 4);
+  for (std::size_t p = 0; p < npix; ++p) {
+    for (int c = 0; c < 3; ++c) px[p * 4 + c] = r.rgb[p * 3 + c];
+    px[p * 4 + 3] = r.variance[p];
+  }
+  if (!out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
+    throw Error("cannot write '" + tmp + "': " + out->geterror());
+  fs::rename(tmp, base + ".exr", ec);
+  if (ec) throw Error("cannot write '" + base + ".exr': " + ec.message());
+  json side;
+  side["key"] = key;
+  side["seconds"] = r.seconds;
+  side["file"] = fs::path(base + ".exr").filename().string();
+  std::ofstream(base + ".json") << side.dump(2) << "\n";
+}
+
+}  // namespace envpis::app
+#endif  // ENVPIS_HAVE_RENDER
