@@ -1,16 +1,15 @@
 #include "envpis/importance_table.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 
-#include "distribution_util.h"
+#include "envpis_assert.h"
 #include "envpis/equal_area.h"
+#include "fine_level.h"
+#include "kernels.h"
+#include "parallel.h"
 #include "texel_peak.h"
 
 #define ENVPIS_KERNEL_NS scalar
@@ -52,20 +51,18 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     F_ = kMaxFine / T_;
     N_ = T_ * F_;
   }
-  build_importance(map, options.floor, options.peak_ratio, options.compensated);
-  build_cells();
+  auto fine = std::make_shared<detail::FineLevel>(T_, F_);
+  fine_ = fine;
+  build_importance(map, options.floor, options.peak_ratio, options.compensated, fine->values());
+  build_top_level(fine->build());
   build_cones();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::size_t ImportanceTable::texel_index(int x, int y) const {
-  const int cx = x / F_, cy = y / F_, lx = x - cx * F_, ly = y - cy * F_;
-  return ((static_cast<std::size_t>(cy) * T_ + cx) * F_ + ly) * F_ + lx;
-}
+float ImportanceTable::importance(int x, int y) const { return fine_->values()[fine_->index(x, y)]; }
 
-float ImportanceTable::importance(int x, int y) const { return func_[texel_index(x, y)]; }
-
-void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated) {
+void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated,
+                                       std::vector<float>& func) {
   const std::size_t total = static_cast<std::size_t>(N_) * N_;
   // The cell-major texel index is separable: index(x, y) = row_base[y] + col_base[x].
   std::vector<std::uint32_t> row_base(N_), col_base(N_);
@@ -134,10 +131,10 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
   std::vector<float> gather(total, 0.0f);
   std::vector<std::uint8_t> small_source(total, 0);  // map texels < half a table texel here
   const float inv = 1.0f / float(N_ * s);
-  tbb::parallel_for(tbb::blocked_range<int>(0, N_), [&](const tbb::blocked_range<int>& rows) {
+  detail::parallel_for(0, N_, [&](int row_begin, int row_end) {
     const std::size_t m = static_cast<std::size_t>(N_) * s;
     std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m);
-    for (int y = rows.begin(); y < rows.end(); ++y) {
+    for (int y = row_begin; y < row_end; ++y) {
       for (int sy = 0; sy < s; ++sy) {
         const float v = (float(y * s + sy) + 0.5f) * inv;
         for (std::size_t i = 0; i < m; ++i) {
@@ -196,9 +193,9 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
   std::vector<Row> rows_out(chunk);
   for (int y0 = 0; y0 < h; y0 += chunk) {
     const int y1 = std::min(h, y0 + chunk);
-    tbb::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
+    detail::parallel_for(y0, y1, [&](int row_begin, int row_end) {
       std::vector<float> mx, my, mz;
-      for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int y = row_begin; y < row_end; ++y) {
         int kx, ky;
         splits(y, kx, ky);
         Row& out = rows_out[y - y0];
@@ -274,11 +271,11 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
 
   // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
   // (so a texel that sees light by either route keeps a positive density).
-  func_.assign(total, 0.0f);
+  func.assign(total, 0.0f);
   for (std::size_t i = 0; i < total; ++i) {
     const double sp = splat[i] / table_texel_sr, ga = gather[i];
     double v = small_source[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
-    func_[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
+    func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
   }
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
   if (peak_ratio > 0) {
@@ -286,24 +283,24 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
     const float inv_k = 1.0f / peak_ratio;
     for (int y = 0; y < N_; ++y)
       for (int x = 0; x < N_; ++x) {
-        float& v = func_[index(x, y)];
+        float& v = func[index(x, y)];
         v = std::max(v, peaks[static_cast<std::size_t>(y) * N_ + x] * inv_k);
       }
   }
   double sum = 0;
-  for (float v : func_) sum += v;
+  for (float v : func) sum += v;
   empty_ = !(sum > 0) || !std::isfinite(sum);
   if (empty_) {
-    std::fill(func_.begin(), func_.end(), 0.0f);
+    std::fill(func.begin(), func.end(), 0.0f);
     integral_ = 0;
     return;
   }
   if (compensated) {
     const float mean = static_cast<float>(sum / double(total));
     double csum = 0;
-    for (float v : func_) csum += std::max(0.0f, v - mean);
+    for (float v : func) csum += std::max(0.0f, v - mean);
     if (csum > 0) {
-      for (float& v : func_) v = std::max(0.0f, v - mean);
+      for (float& v : func) v = std::max(0.0f, v - mean);
       integral_ = csum * table_texel_sr;
       return;
     }
@@ -312,7 +309,7 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
   const float min_value = static_cast<float>(floor * sum / double(total));
   if (min_value > 0) {
     sum = 0;
-    for (float& v : func_) {
+    for (float& v : func) {
       v = std::max(v, min_value);
       sum += v;
     }
@@ -320,97 +317,74 @@ void ImportanceTable::build_importance(const EnvironmentMap& map, float floor, f
   integral_ = sum * table_texel_sr;
 }
 
-void ImportanceTable::build_cells() {
+void ImportanceTable::build_top_level(const std::vector<double>& cell_sums) {
   const int cells = T_ * T_;
-  const std::size_t per_cell = static_cast<std::size_t>(F_) * F_;
-  cdf_.assign(func_.size(), 0.0f);
-  cell_sum_.assign(cells, 0.0f);
-  cell_prob_.assign(cells, 0.0f);
-  std::vector<double> sums(cells, 0.0);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cells), [&](const tbb::blocked_range<int>& range) {
-    std::vector<float> cdf(per_cell);  // row-major running sums, normalized to end at 1
-    for (int c = range.begin(); c < range.end(); ++c) {
-      const float* f = &func_[c * per_cell];
-      double total_c = 0;
-      for (std::size_t i = 0; i < per_cell; ++i) total_c += f[i];
-      sums[c] = total_c;
-      if (total_c > 0) {
-        double run = 0;
-        for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = static_cast<float>((run += f[i]) / total_c);
-      } else {  // a zero cell (only with floor 0): uniform, never chosen because its probability is 0
-        for (std::size_t i = 0; i < per_cell; ++i) cdf[i] = float(i + 1) / float(per_cell);
-      }
-      cdf[per_cell - 1] = 1.0f;
-      detail::store_split2d(cdf.data(), F_, F_, &cdf_[c * per_cell]);
-    }
-  });
   double total = 0;
-  for (double s : sums) total += s;
-  for (int c = 0; c < cells; ++c) {
-    cell_sum_[c] = static_cast<float>(sums[c]);
-    cell_prob_[c] = total > 0 ? static_cast<float>(sums[c] / total) : 0.0f;
-  }
-  // Top-level row totals and their running sums for environment-only sampling (the same layout and
-  // search as the product sampler's: a row, then a scan of its cells).
-  top_row_sum_.assign(T_, 0.0f);
-  top_row_cdf_.assign(T_, 0.0f);
-  detail::store_row_sums(cell_prob_.data(), T_, T_, top_row_sum_.data(), top_row_cdf_.data());
-  padded_ = (cells + 15) / 16 * 16;
-  for (auto& a : soa_) a.assign(padded_, 0.0f);
-  for (int c = 0; c < cells; ++c) soa_[5][c] = cell_prob_[c];
+  for (double v : cell_sums) total += v;
+  top_ = DiscreteDistribution2D(T_, T_);
+  for (int c = 0; c < cells; ++c) top_.values()[c] = total > 0 ? static_cast<float>(cell_sums[c] / total) : 0.0f;
+  top_.update();
+  for (auto& a : soa_) a.assign(static_cast<std::size_t>(top_.padded_size()), 0.0f);
+  for (int c = 0; c < cells; ++c) soa_[5][c] = top_.values()[c];
 }
+
+namespace {
+// A cone that contains every direction of top cell c of a T x T grid on the equal-area square.
+Cone bounding_cone(int T, int c) {
+  constexpr int kEdge = 256;  // boundary samples per cell edge
+  constexpr int kInner = 16;  // interior grid for the axis
+  const int cx = c % T, cy = c / T;
+  const float x0 = float(cx) / T, y0 = float(cy) / T, side = 1.0f / T;
+  Cone cone;
+  if (T <= 2) {  // cells of a quarter sphere or more: use the whole sphere
+    cone.axis = equal_area_square_to_sphere({x0 + 0.5f * side, y0 + 0.5f * side});
+    cone.cos_half_angle = -1.0f;
+    cone.sin_half_angle = 0.0f;
+    return cone;
+  }
+  double ax = 0, ay = 0, az = 0;
+  for (int j = 0; j < kInner; ++j)
+    for (int i = 0; i < kInner; ++i) {
+      const Vec3 d = equal_area_square_to_sphere({x0 + (i + 0.5f) * side / kInner, y0 + (j + 0.5f) * side / kInner});
+      ax += d.x;
+      ay += d.y;
+      az += d.z;
+    }
+  const double len = std::sqrt(ax * ax + ay * ay + az * az);
+  const Vec3 axis{float(ax / len), float(ay / len), float(az / len)};
+  // Walk the boundary; the largest angle from the axis over the cell is on its boundary (the cell is
+  // a connected region that does not contain the axis' antipode). Every boundary point is within half
+  // the largest gap between consecutive samples of one of them, so that half-gap is added.
+  double max_angle = 0, max_gap = 0;
+  Vec3 prev = equal_area_square_to_sphere({x0, y0});
+  for (int k = 1; k <= 4 * kEdge; ++k) {
+    const int e = (k - 1) / kEdge;
+    const float t = float(k - e * kEdge) / kEdge;
+    Point2 p;
+    switch (e) {
+      case 0: p = {x0 + t * side, y0}; break;
+      case 1: p = {x0 + side, y0 + t * side}; break;
+      case 2: p = {x0 + side - t * side, y0 + side}; break;
+      default: p = {x0, y0 + side - t * side}; break;
+    }
+    const Vec3 d = equal_area_square_to_sphere(p);
+    max_angle = std::max(max_angle, std::acos(std::clamp(double(dot(d, axis)), -1.0, 1.0)));
+    max_gap = std::max(max_gap, std::acos(std::clamp(double(dot(d, prev)), -1.0, 1.0)));
+    prev = d;
+  }
+  const double b = std::min(max_angle + 0.5 * max_gap + 1e-4, double(kPi));
+  cone.axis = axis;
+  cone.cos_half_angle = static_cast<float>(std::cos(b));
+  cone.sin_half_angle = static_cast<float>(std::sin(b));
+  return cone;
+}
+}  // namespace
 
 void ImportanceTable::build_cones() {
   const int cells = T_ * T_;
   cones_.assign(cells, Cone{});
-  constexpr int kEdge = 256;  // boundary samples per cell edge
-  constexpr int kInner = 16;  // interior grid for the axis
-  tbb::parallel_for(0, cells, [&](int c) {
-    const int cx = c % T_, cy = c / T_;
-    const float x0 = float(cx) / T_, y0 = float(cy) / T_, side = 1.0f / T_;
-    Cone cone;
-    if (T_ <= 2) {  // cells of a quarter sphere or more: use the whole sphere
-      cone.axis = equal_area_square_to_sphere({x0 + 0.5f * side, y0 + 0.5f * side});
-      cone.cos_half_angle = -1.0f;
-      cone.sin_half_angle = 0.0f;
-      cones_[c] = cone;
-      return;
-    }
-    double ax = 0, ay = 0, az = 0;
-    for (int j = 0; j < kInner; ++j)
-      for (int i = 0; i < kInner; ++i) {
-        const Vec3 d = equal_area_square_to_sphere({x0 + (i + 0.5f) * side / kInner, y0 + (j + 0.5f) * side / kInner});
-        ax += d.x;
-        ay += d.y;
-        az += d.z;
-      }
-    const double len = std::sqrt(ax * ax + ay * ay + az * az);
-    const Vec3 axis{float(ax / len), float(ay / len), float(az / len)};
-    // Walk the boundary; the largest angle from the axis over the cell is on its boundary (the cell is
-    // a connected region that does not contain the axis' antipode). Every boundary point is within half
-    // the largest gap between consecutive samples of one of them, so that half-gap is added.
-    double max_angle = 0, max_gap = 0;
-    Vec3 prev = equal_area_square_to_sphere({x0, y0});
-    for (int k = 1; k <= 4 * kEdge; ++k) {
-      const int e = (k - 1) / kEdge;
-      const float t = float(k - e * kEdge) / kEdge;
-      Point2 p;
-      switch (e) {
-        case 0: p = {x0 + t * side, y0}; break;
-        case 1: p = {x0 + side, y0 + t * side}; break;
-        case 2: p = {x0 + side - t * side, y0 + side}; break;
-        default: p = {x0, y0 + side - t * side}; break;
-      }
-      const Vec3 d = equal_area_square_to_sphere(p);
-      max_angle = std::max(max_angle, std::acos(std::clamp(double(dot(d, axis)), -1.0, 1.0)));
-      max_gap = std::max(max_gap, std::acos(std::clamp(double(dot(d, prev)), -1.0, 1.0)));
-      prev = d;
-    }
-    const double b = std::min(max_angle + 0.5 * max_gap + 1e-4, double(kPi));
-    cone.axis = axis;
-    cone.cos_half_angle = static_cast<float>(std::cos(b));
-    cone.sin_half_angle = static_cast<float>(std::sin(b));
-    cones_[c] = cone;
+  detail::parallel_for(0, cells, [&](int begin, int end) {
+    for (int c = begin; c < end; ++c) cones_[c] = bounding_cone(T_, c);
   });
   for (int c = 0; c < cells; ++c) {
     soa_[0][c] = cones_[c].axis.x;
@@ -420,7 +394,7 @@ void ImportanceTable::build_cones() {
     soa_[4][c] = cones_[c].sin_half_angle;
   }
   // Padding cells: probability 0, a cone that evaluates harmlessly.
-  for (int c = cells; c < padded_; ++c) {
+  for (int c = cells; c < top_.padded_size(); ++c) {
     soa_[2][c] = 1.0f;
     soa_[3][c] = 1.0f;
   }
@@ -437,73 +411,46 @@ int ImportanceTable::cell_of_direction(Vec3 d) const {
   return cell_of(equal_area_sphere_to_square(d));
 }
 
-Point2 ImportanceTable::sample_in_cell(int c, Point2 u, float* pdf_in_cell, bool* interior) const {
-  const std::size_t per_cell = static_cast<std::size_t>(F_) * F_;
-  const float* cdf = &cdf_[c * per_cell];
-  const detail::Flat2DSample s = detail::sample_split2d(cdf, F_, F_, u);
-  const int cx = c % T_, cy = c / T_;
-  if (pdf_in_cell) {
-    const float f = func_[c * per_cell + static_cast<std::size_t>(s.y) * F_ + s.x];
-    *pdf_in_cell = cell_sum_[c] > 0 ? f / cell_sum_[c] * float(F_) * float(F_) : 0.0f;
-  }
-  if (interior) {
-    // The square -> sphere -> square round trip is accurate to a few 1e-6 (tests/test_equal_area.cpp);
-    // 2% of a texel is at least 7e-6 for N <= 2904 and scales with the texel.
-    constexpr float kMargin = 0.02f;
-    *interior = s.ox > kMargin && s.ox < 1 - kMargin && s.oy > kMargin && s.oy < 1 - kMargin && N_ <= 2904;
-  }
-  // Keep the point kEdge inside its top cell. Rounding can put it on the cell's far edge (an offset
-  // of 1 - 2^-24 in the last texel), and a point within round-off of the edge can come back from
-  // square -> sphere -> square in the neighbouring cell, whose product weight may be 0 (a cell wholly
-  // below an opaque proxy's horizon): the sample would get pdf 0 where pdf() integrates to 1. The
-  // move is under 2% of a texel for N <= 1000 and such samples are never `interior`, so their pdf is
-  // pdf(direction), which finds this cell.
-  constexpr float kEdge = 2e-5f;
-  const float inv_T = 1.0f / float(T_);
-  const float px = (float(cx * F_ + s.x) + s.ox) / float(N_), py = (float(cy * F_ + s.y) + s.oy) / float(N_);
-  return {std::clamp(px, float(cx) * inv_T + kEdge, float(cx + 1) * inv_T - kEdge),
-          std::clamp(py, float(cy) * inv_T + kEdge, float(cy + 1) * inv_T - kEdge)};
-}
+float ImportanceTable::pdf_in_cell(int c, Point2 p) const { return fine_->pdf(c, p); }
 
-float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
-  const int x = std::clamp(static_cast<int>(p.x * N_), 0, N_ - 1);
-  const int y = std::clamp(static_cast<int>(p.y * N_), 0, N_ - 1);
-  // p may sit on the cell's boundary through rounding: clamp into the cell.
-  const int cx = c % T_, cy = c / T_;
-  const int xc = std::clamp(x, cx * F_, cx * F_ + F_ - 1), yc = std::clamp(y, cy * F_, cy * F_ + F_ - 1);
-  if (!(cell_sum_[c] > 0)) return 0.0f;
-  return func_[texel_index(xc, yc)] / cell_sum_[c] * float(F_) * float(F_);
-}
-
-DirectionSample ImportanceTable::sample(Point2 u) const {
+DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point2 u) const {
   DirectionSample out;
-  if (empty_) return out;
-  const detail::Flat2DSample s = detail::sample_row_scan(top_row_cdf_.data(), top_row_sum_.data(), cell_prob_.data(),
-                                                          T_, T_, u, top_row_cdf_[T_ - 1]);
-  const int c = s.y * T_ + s.x;
-  float pc;
-  bool interior;
-  const Point2 p = sample_in_cell(c, {s.ox, s.oy}, &pc, &interior);
-  out.direction = equal_area_square_to_sphere(p);
+  if (empty_ || !top.valid()) return out;
+  ENVPIS_ASSERT(top.width() == T_ && top.height() == T_);
+  const DiscreteDistribution2D::Sample cell = top.sample(u);
+  const int c = cell.y * T_ + cell.x;
+  const detail::FineLevel::Sample s = fine_->sample(c, cell.offset);
+  out.direction = equal_area_square_to_sphere(s.p);
   out.cell = c;
-  // Far from texel edges the sampled texel is the one pdf() finds: its density directly (same
-  // arithmetic as pdf()); near an edge, pdf() of the direction, so the two always agree.
-  out.pdf = interior ? cell_prob_[c] * pc * float(T_) * float(T_) * kInv4Pi : pdf(out.direction);
+  // Far from texel edges the sampled texel is the one pdf() finds: its density directly (the same
+  // arithmetic); near an edge, pdf() of the direction, so the two always agree.
+  out.pdf = s.interior ? solid_angle_pdf(cell.pmf, s.pdf) : pdf(top, out.direction);
   return out;
 }
 
-float ImportanceTable::pdf(Vec3 d) const {
-  if (empty_ || !is_valid_direction(d)) return 0.0f;
+float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d) const {
+  if (empty_ || !top.valid() || !is_valid_direction(d)) return 0.0f;
   const Point2 p = equal_area_sphere_to_square(d);
   const int c = cell_of(p);
-  return cell_prob_[c] * pdf_in_cell(c, p) * float(T_) * float(T_) * kInv4Pi;
+  return solid_angle_pdf(top.pmf(c), fine_->pdf(c, p));
+}
+
+Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d) const {
+  if (empty_ || !top.valid() || !is_valid_direction(d)) return {0.5f, 0.5f};
+  const Point2 p = equal_area_sphere_to_square(d);
+  const int c = cell_of(p);
+  return top.invert(c % T_, c / T_, fine_->invert(c, p));
+}
+
+detail::CellArrays detail::cell_arrays(const ImportanceTable& t) {
+  const auto& a = t.soa_;
+  return {a[0].data(), a[1].data(), a[2].data(), a[3].data(), a[4].data(), a[5].data(), t.top_.padded_size()};
 }
 
 std::size_t ImportanceTable::bytes_used() const {
   std::size_t b = sizeof(*this);
-  b += func_.capacity() * sizeof(float) + cdf_.capacity() * sizeof(float);
-  b += (cell_sum_.capacity() + cell_prob_.capacity() + top_row_sum_.capacity() + top_row_cdf_.capacity()) *
-       sizeof(float);
+  b += fine_->bytes_used();
+  b += static_cast<std::size_t>(top_.padded_size() + 2 * T_) * sizeof(float);
   b += cones_.capacity() * sizeof(Cone);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
   return b;

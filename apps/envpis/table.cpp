@@ -418,7 +418,7 @@ void run_table(const TableArgs& a) {
     std::fprintf(stderr,
                  "envpis table: warning: the proxy gives no cell a positive weight (all-zero proxy?): the "
                  "product sampler falls back to environment-only sampling\n");
-  std::printf("product: prepare %.0f ns per shading point (%s)\n", prepare_ns, simd_name());
+  std::printf("product: prepare %.0f ns per shading point (%s)\n", prepare_ns, to_string(sampler.simd()));
 
   std::vector<float> env_prob(std::size_t(T) * T), prod_prob(std::size_t(T) * T);
   for (int c = 0; c < T * T; ++c) {
@@ -532,7 +532,7 @@ void run_table(const TableArgs& a) {
         {"reflection_axis", vec_json(pp.r)}, {"refraction_axis", vec_json(pp.t)}}},
       {"environment_fallback", sampler.uses_environment_fallback()},
       {"prepare_ns", prepare_ns},
-      {"simd", simd_name()}};
+      {"simd", to_string(sampler.simd())}};
   j["samples"] = {{"count", samples},
                   {"seed", seed},
                   {"above_surface", double(above) / double(samples)},
