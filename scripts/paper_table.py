@@ -4,10 +4,17 @@ BENCHMARKS.md: relMSE ratios per roughness at equal spp and at equal time, the o
 to the oracle, and the issue's targets with met / not met.
 
     python3 scripts/paper_table.py OUT/*/metrics.json > OUT/table.md
+    python3 scripts/paper_table.py --summary [LABEL=]OUT [[LABEL=]OUT2]
+
+The first form prints the full per-map tables. --summary prints the pooled table of BENCHMARKS.md's
+"Current" fig1 section: one row per comparison and run (each OUT a scripts/paper-table.sh output
+directory; LABEL defaults to the run's sampler), with two runs also the ratio first / second of the
+pooled equal-spp mis / product, then each run's overhead and worst sphere-map.
 
 Ratios > 1 mean product has less error (mis / product, mis-comp / product) or that the oracle has less
 error than product (product / oracle). "Pooled" is the geometric mean over the maps.
 """
+import glob
 import json
 import math
 import os
@@ -116,16 +123,84 @@ def md_rows(table, regions, maps, relerr=None):
     return lines, dict(zip(regions, pooled))
 
 
-def main(paths):
+def load_runs(paths):
+    """[(map name, metrics)] sorted by map name."""
     runs = []
     for p in paths:
         with open(p, encoding="utf-8") as fh:
             m = json.load(fh)
         runs.append((os.path.splitext(os.path.basename(m["environment"]))[0], m))
+    runs.sort(key=lambda x: x[0])
+    return runs
+
+
+def pooled_row(runs, block_key, num, den, regions):
+    """Geometric mean over the maps of relMSE(num) / relMSE(den), per region (None without the strategies)."""
+    t = ratio_table(runs, block_key, num, den)
+    if not t:
+        return None
+    return [geomean([t[mp].get(r) for mp in t]) for r in regions]
+
+
+SUMMARY_ROWS = [
+    ("equal_spp", "mis", "product", "equal spp, mis / product"),
+    ("equal_spp", "mis-comp", "product", "equal spp, mis-comp / product"),
+    ("equal_time", "mis", "product", "equal time, mis / product"),
+    ("equal_time", "mis-comp", "product", "equal time, mis-comp / product"),
+]
+
+
+def summary(args):
+    """The pooled fig1 table over one or two paper-table runs (see the module's docstring)."""
+    groups = []
+    for a in args:
+        name, _, d = a.partition("=") if "=" in a else ("", "", a)
+        runs = load_runs(sorted(glob.glob(os.path.join(d, "*", "metrics.json"))))
+        if not runs:
+            print(f"paper_table.py: no */metrics.json under {d}", file=sys.stderr)
+            return 2
+        m0 = runs[0][1]
+        groups.append((name or m0.get("sampler", "independent"), runs))
+    regions = [r["name"] for r in groups[0][1][0][1]["regions"]]
+    out = ["| comparison (pooled over the maps) | run | " + " | ".join(label(r) for r in regions) + " |",
+           "|---|---|" + "---|" * len(regions)]
+    rows = {}
+    for key, num, den, title in SUMMARY_ROWS:
+        for name, runs in groups:
+            row = pooled_row(runs, key, num, den, regions)
+            if row is None:
+                continue
+            rows[(key, num, den, name)] = row
+            out.append(f"| {title} | {name} | " + " | ".join(f(x) for x in row) + " |")
+        if len(groups) == 2 and (key, num) == ("equal_spp", "mis"):
+            a, b = (rows.get((key, num, den, g[0])) for g in groups)
+            if a and b:
+                out.append(f"| {title} | {groups[0][0]} / {groups[1][0]} | "
+                           + " | ".join(f(x / y) if x and y else "-" for x, y in zip(a, b)) + " |")
+    out.append("")
+    out.append("| run | maps | seeds | spp | reference | overhead wall / CPU (pooled) | worst sphere-map, product / mis at equal spp |")
+    out.append("|---|---|---|---|---|---|---|")
+    for name, runs in groups:
+        m0 = runs[0][1]
+        walls = [m["overhead"]["ratio"] for _, m in runs if m.get("overhead")]
+        cpus = [m["overhead"].get("ratio_cpu") for _, m in runs if m.get("overhead")]
+        t = ratio_table(runs, "equal_spp", "product", "mis")
+        worst = max(((v, mp, r) for mp in t for r, v in t[mp].items() if math.isfinite(v)), default=None)
+        w = f"{f(worst[0])}x ({worst[1]}, {label(worst[2])})" if worst else "-"
+        out.append(f"| {name} | {len(runs)} | {len(m0.get('seeds', [0]))} | {m0['equal_spp']['spp']} | "
+                   f"{m0['reference']['strategy']} at {m0['reference']['spp']} spp | {f(geomean(walls), 3)} / "
+                   f"{f(geomean(cpus), 3)} | {w} |")
+    print("\n".join(out))
+    return 0
+
+
+def main(paths):
+    if paths and paths[0] == "--summary":
+        return summary(paths[1:]) if 1 <= len(paths) - 1 <= 2 else usage()
+    runs = load_runs(paths)
     if not runs:
         print("paper_table.py: no metrics.json given", file=sys.stderr)
         return 2
-    runs.sort(key=lambda x: x[0])
     maps = [n for n, _ in runs]
     regions = [r["name"] for r in runs[0][1]["regions"]]
     head = "| map | " + " | ".join(label(r) for r in regions) + " |"
@@ -223,6 +298,11 @@ def main(paths):
     out.append("")
     print("\n".join(out))
     return 0
+
+
+def usage():
+    print("usage: paper_table.py METRICS.json ... | --summary [LABEL=]DIR [[LABEL=]DIR]", file=sys.stderr)
+    return 2
 
 
 if __name__ == "__main__":
