@@ -1,4 +1,4 @@
-// The light-sampling strategies compared by the renderer (DESIGN.md section 4). Each is a pair of
+// The light-sampling strategies compared by the renderer. Each is a pair of
 // (light distribution, whether BSDF sampling is combined with it by MIS):
 //
 //   bsdf      BSDF sampling only; no light sample.

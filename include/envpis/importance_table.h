@@ -11,8 +11,8 @@
 // has more texels (then N^2 >= texel count: 4096x2048 -> 2904). ImportanceTableOptions::fine_resolution
 // overrides it (rounded up to a multiple of T). Why twice: table texels never line up with a lat-long
 // map's texels, so at equal resolution each table texel mixes several map texels and its importance
-// misstates what eval returns inside it; at twice the resolution sunrise's relMSE on fig1 halves
-// (BENCHMARKS.md).
+// misstates what eval returns inside it (docs/decisions.md, "A fine table twice the map's resolution",
+// has the measurement).
 //
 // Importance of a fine texel: the average of the RGB channels of the radiance, averaged over the
 // texel by stratified bilinear look-ups (or, where map texels are much smaller than table texels, by
