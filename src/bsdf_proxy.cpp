@@ -4,7 +4,7 @@
 #include <cmath>
 
 #define ENVPIS_KERNEL_NS scalar
-#include "kernels_impl.inl"
+#include "proxy_lobe_impl.h"
 #include "proxy_internal.h"
 
 namespace envpis {

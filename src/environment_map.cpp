@@ -8,6 +8,7 @@
 
 #include "envpis/equal_area.h"
 #include "image_format.h"
+#include "texel_filter.h"
 
 namespace envpis {
 
@@ -132,34 +133,11 @@ std::vector<std::string> EnvironmentMap::warnings() const {
 }
 
 Rgb EnvironmentMap::bilinear_latlong(float u, float v) const {
-  const float px = u * width_ - 0.5f, py = v * height_ - 0.5f;
-  const float fx = std::floor(px), fy = std::floor(py);
-  const float tx = px - fx, ty = py - fy;
-  int x0 = static_cast<int>(fx) % width_;
-  if (x0 < 0) x0 += width_;
-  const int x1 = x0 + 1 == width_ ? 0 : x0 + 1;
-  const int y0 = std::clamp(static_cast<int>(fy), 0, height_ - 1);
-  const int y1 = std::clamp(static_cast<int>(fy) + 1, 0, height_ - 1);
-  return (texel(x0, y0) * (1 - tx) + texel(x1, y0) * tx) * (1 - ty) +
-         (texel(x0, y1) * (1 - tx) + texel(x1, y1) * tx) * ty;
+  return detail::bilinear_latlong([this](int x, int y) { return texel(x, y); }, width_, height_, u, v);
 }
 
 Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
-  const int n = width_;
-  const float px = x * n - 0.5f, py = y * n - 0.5f;
-  const float fx = std::floor(px), fy = std::floor(py);
-  const float tx = px - fx, ty = py - fy;
-  Rgb acc;
-  for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 2; ++i) {
-      int xi = static_cast<int>(fx) + i, yi = static_cast<int>(fy) + j;
-      if (!equal_area_wrap(n, xi, yi)) {
-        xi = std::clamp(xi, 0, n - 1);
-        yi = std::clamp(yi, 0, n - 1);
-      }
-      acc = acc + texel(xi, yi) * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
-    }
-  return acc;
+  return detail::bilinear_equal_area([this](int i, int j) { return texel(i, j); }, width_, x, y);
 }
 
 // The texel that texture point (x, y) falls in. Outside [0,1) a lat-long map wraps in u and clamps in v;

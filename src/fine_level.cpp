@@ -38,16 +38,15 @@ SplitSample sample_split(const float* split, int F, Point2 u) {
 }  // namespace
 
 FineLevel::FineLevel(int top, int per_cell)
-    : T_(top), F_(per_cell), func_(static_cast<std::size_t>(top) * per_cell * top * per_cell, 0.0f) {}
-
-std::size_t FineLevel::row_base(int y) const {
-  const std::size_t c = static_cast<std::size_t>(y / F_), l = static_cast<std::size_t>(y % F_);
-  return (c * T_ * F_ + l) * F_;
-}
-
-std::size_t FineLevel::col_base(int x) const {
-  const std::size_t c = static_cast<std::size_t>(x / F_), l = static_cast<std::size_t>(x % F_);
-  return c * F_ * F_ + l;
+    : T_(top), F_(per_cell), func_(static_cast<std::size_t>(top) * per_cell * top * per_cell, 0.0f) {
+  const int N = top * per_cell;
+  row_base_.resize(N);
+  col_base_.resize(N);
+  for (int i = 0; i < N; ++i) {
+    const std::size_t c = static_cast<std::size_t>(i / per_cell), l = static_cast<std::size_t>(i % per_cell);
+    row_base_[i] = static_cast<std::uint32_t>((c * top * per_cell + l) * per_cell);
+    col_base_[i] = static_cast<std::uint32_t>(c * per_cell * per_cell + l);
+  }
 }
 
 std::vector<double> FineLevel::build() {

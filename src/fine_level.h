@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "envpis/common.h"
@@ -25,9 +26,7 @@ class FineLevel {
   int resolution() const { return T_ * F_; }
 
   /// Index of texel (x, y), 0 <= x, y < N, in values(); separable: row_base(y) + col_base(x).
-  std::size_t index(int x, int y) const { return row_base(y) + col_base(x); }
-  std::size_t row_base(int y) const;
-  std::size_t col_base(int x) const;
+  std::size_t index(int x, int y) const { return std::size_t(row_base_[y]) + col_base_[x]; }
   std::vector<float>& values() { return func_; }
   const std::vector<float>& values() const { return func_; }
 
@@ -52,6 +51,7 @@ class FineLevel {
 
  private:
   int T_ = 1, F_ = 1;
+  std::vector<std::uint32_t> row_base_, col_base_;  // N each: index(x, y) = row_base_[y] + col_base_[x]
   std::vector<float> func_;      // N^2 importance values, cell-major
   std::vector<float> cdf_;       // N^2 normalized running sums per cell, row ends first
   std::vector<float> cell_sum_;  // T^2

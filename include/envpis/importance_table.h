@@ -136,8 +136,6 @@ class ImportanceTable {
 
  private:
   friend detail::CellArrays detail::cell_arrays(const ImportanceTable& table);
-  void build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated,
-                        std::vector<float>& func);
   void build_top_level(const std::vector<double>& cell_sums);
   void build_cones();
 
