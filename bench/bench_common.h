@@ -36,5 +36,8 @@ const std::vector<ShadingPoint>& shading_points();
 const std::vector<envpis::Point2>& uniform_points();
 /// kRing uniform unit directions.
 const std::vector<envpis::Vec3>& uniform_directions();
+/// The instruction set the benchmarks ask the library for: ENVPIS_SIMD (best, scalar, sse2, avx2,
+/// avx512), default best. The library itself never reads the environment.
+envpis::Simd bench_simd();
 
 }  // namespace envpis_bench

@@ -121,10 +121,18 @@ const std::vector<Vec3>& uniform_directions() {
   return dirs;
 }
 
+envpis::Simd bench_simd() {
+  static const envpis::Simd simd = [] {
+    const char* name = std::getenv("ENVPIS_SIMD");
+    return envpis::simd_resolve(name ? envpis::parse_simd(name) : envpis::Simd::Best);
+  }();
+  return simd;
+}
+
 }  // namespace envpis_bench
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("envpis_simd", envpis::simd_name());
+  benchmark::AddCustomContext("envpis_simd", envpis::to_string(envpis_bench::bench_simd()));
   benchmark::AddCustomContext("envpis_version", envpis::kVersion);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -60,10 +60,10 @@ void BM_SquareToSphere_ScalarLoop(benchmark::State& state) {
 void BM_SquareToSphere_Batched(benchmark::State& state) {
   SquareSoA d;
   for (auto _ : state) {
-    equal_area_square_to_sphere(kBatch, d.u.data(), d.v.data(), d.x.data(), d.y.data(), d.z.data());
+    equal_area_square_to_sphere(kBatch, d.u.data(), d.v.data(), d.x.data(), d.y.data(), d.z.data(), bench_simd());
     benchmark::ClobberMemory();
   }
-  state.SetLabel(simd_name());
+  state.SetLabel(to_string(bench_simd()));
   finish(state);
 }
 
@@ -102,10 +102,10 @@ void BM_SphereToSquare_ScalarLoop(benchmark::State& state) {
 void BM_SphereToSquare_Batched(benchmark::State& state) {
   SphereSoA d;
   for (auto _ : state) {
-    equal_area_sphere_to_square(kBatch, d.x.data(), d.y.data(), d.z.data(), d.u.data(), d.v.data());
+    equal_area_sphere_to_square(kBatch, d.x.data(), d.y.data(), d.z.data(), d.u.data(), d.v.data(), bench_simd());
     benchmark::ClobberMemory();
   }
-  state.SetLabel(simd_name());
+  state.SetLabel(to_string(bench_simd()));
   finish(state);
 }
 

@@ -26,7 +26,7 @@ void product_prepare(benchmark::State& state, bool simd) {
   const ImportanceTable& table = sunset_table();
   const auto& pts = shading_points();
   ProductSamplerOptions opt;
-  opt.simd = simd;
+  opt.simd = simd ? bench_simd() : Simd::Scalar;
   ProductSampler ps(table, opt);
   std::size_t i = 0;
   for (auto _ : state) {
@@ -35,7 +35,7 @@ void product_prepare(benchmark::State& state, bool simd) {
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations());
-  state.SetLabel(simd ? simd_name() : "scalar reference");
+  state.SetLabel(simd ? to_string(bench_simd()) : "scalar reference");
   table_counters(state, table);
 }
 void BM_ProductPrepare_Scalar(benchmark::State& s) { product_prepare(s, false); }
@@ -53,10 +53,8 @@ void product_weights_kernel(benchmark::State& state, const detail::Kernels* k) {
   std::vector<detail::LobeParams> lobes(kRing);
   for (std::size_t j = 0; j < kRing; ++j)
     lobes[j] = detail::to_lobe_params(prepare_proxy(pts[j].proxy, pts[j].n, pts[j].wo));
-  const detail::CellArrays cells{table.soa_axis_x(), table.soa_axis_y(), table.soa_axis_z(),
-                                 table.soa_cos(),    table.soa_sin(),    table.soa_prob(),
-                                 table.padded_cell_count()};
-  std::vector<float> out(table.padded_cell_count());
+  const detail::CellArrays cells = detail::cell_arrays(table);
+  std::vector<float> out(cells.padded_count);
   std::size_t i = 0;
   for (auto _ : state) {
     k->product_weights(cells, lobes[i++ & kMask], out.data());
@@ -90,7 +88,7 @@ void product_prepare_and_sample(benchmark::State& state, bool simd) {
   const auto& pts = shading_points();
   const auto& us = uniform_points();
   ProductSamplerOptions opt;
-  opt.simd = simd;
+  opt.simd = simd ? bench_simd() : Simd::Scalar;
   ProductSampler ps(table, opt);
   std::size_t i = 0;
   for (auto _ : state) {
@@ -101,7 +99,7 @@ void product_prepare_and_sample(benchmark::State& state, bool simd) {
     benchmark::DoNotOptimize(d);
   }
   state.SetItemsProcessed(state.iterations());
-  state.SetLabel(simd ? simd_name() : "scalar reference");
+  state.SetLabel(simd ? to_string(bench_simd()) : "scalar reference");
   table_counters(state, table);
 }
 void BM_ProductPrepareAndSample_Scalar(benchmark::State& s) { product_prepare_and_sample(s, false); }

@@ -217,7 +217,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   ProductSamplerOptions so;
   const float mixes[8] = {0.0f, 0.0f, 0.1f, 0.5f, 1.0f, 1e-7f, 0.999f, 0.0f};
   so.env_mix = mixes[in.byte(7) & 7];
-  so.simd = (flags & 8) == 0;
+  so.simd = (flags & 8) == 0 ? Simd::Best : Simd::Scalar;
   const RoughnessTransform transforms[4] = {RoughnessTransform::Hybrid, RoughnessTransform::Slides,
                                             RoughnessTransform::Abstract, RoughnessTransform::Hybrid};
   so.proxy.transform = transforms[(flags >> 4) & 3];

@@ -12,7 +12,8 @@ PYBIND11_MODULE(envpis, m) {
       "Arrays are float32 (other numbers are converted); directions are rows of N x 3 arrays, +Z up.";
   py::register_exception<envpis::Error>(m, "Error", PyExc_RuntimeError);
   m.attr("__version__") = ENVPIS_VERSION;
-  m.def("simd_name", &envpis::simd_name, "SIMD path the sampler's kernels use (avx512, avx2, sse2, scalar).");
+  m.def("simd_name", [] { return envpis::to_string(envpis::simd_resolve(envpis::Simd::Best)); },
+        "The widest SIMD instruction set this CPU runs (avx512, avx2, sse2), which the module uses.");
   envpis_py::bind_equal_area(m);
   envpis_py::bind_environment_map(m);
   envpis_py::bind_importance_table(m);

@@ -107,7 +107,7 @@ void FireflyRecorder::add_table_view(const LightSampler& light, FireflyRecord& r
   r.pdf_in_cell = table_->pdf_in_cell(r.cell, p);
   // Every table-based strategy's density is (its cell probability) * pdf_in_cell * T^2 / (4 pi), so
   // the cell probability follows from the light pdf whatever weighted the cells (product, oracle).
-  const float per_cell = r.pdf_in_cell * float(T) * float(T) * kInv4Pi;
+  const float per_cell = table_->solid_angle_pdf(1.0f, r.pdf_in_cell);
   r.cell_probability = per_cell > 0 ? r.light_pdf / per_cell : 0.0f;
   if (const ProductSampler* ps = light.product_sampler(); ps && ps->valid()) {
     const Cone& cone = table_->cell_cone(r.cell);

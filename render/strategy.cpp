@@ -87,8 +87,7 @@ LightSampler::LightSampler(const StrategyTables& tables)
     dx_.resize(n);
     dy_.resize(n);
     dz_.resize(n);
-    cell_weight_.resize(cells);
-    cell_cdf_.resize(cells);
+    oracle_top_ = DiscreteDistribution2D(table_->top_resolution(), table_->top_resolution());
     active_.reserve(cells);
   }
 }
@@ -142,7 +141,8 @@ void LightSampler::prepare(const ShadingContext& sc) {
       }
   }
   equal_area_square_to_sphere(i, su_.data(), sv_.data(), dx_.data(), dy_.data(), dz_.data());
-  std::fill(cell_weight_.begin(), cell_weight_.end(), 0.0f);
+  float* cell_weight = oracle_top_.values();
+  std::fill(cell_weight, cell_weight + cells, 0.0f);
   for (std::size_t a = 0; a < active_.size(); ++a) {
     const int c = active_[a];
     float acc = 0;
@@ -155,15 +155,10 @@ void LightSampler::prepare(const ShadingContext& sc) {
       acc += f.average() * std::fabs(wl.z);
     }
     const float w = table_->cell_probability(c) * acc / float(per_cell);
-    cell_weight_[c] = w > 0 && std::isfinite(w) ? w : 0.0f;
+    cell_weight[c] = w > 0 && std::isfinite(w) ? w : 0.0f;
   }
-  float running = 0;
-  for (int c = 0; c < cells; ++c) {
-    running += cell_weight_[c];
-    cell_cdf_[c] = running;
-  }
-  cell_total_ = running;
-  oracle_valid_ = running > 0 && std::isfinite(running);
+  oracle_top_.update();
+  oracle_valid_ = oracle_top_.valid();
 }
 
 DirectionSample LightSampler::sample(Point2 u) const {
@@ -173,25 +168,7 @@ DirectionSample LightSampler::sample(Point2 u) const {
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->sample(u) : DirectionSample{};
     case Strategy::Product: return product_ ? product_->sample(u) : DirectionSample{};
-    case Strategy::Oracle: {
-      if (!oracle_valid_) return {};
-      const int cells = static_cast<int>(cell_cdf_.size());
-      const float target = u.x * cell_total_;
-      int c = static_cast<int>(std::upper_bound(cell_cdf_.begin(), cell_cdf_.end(), target) - cell_cdf_.begin());
-      if (c >= cells) {  // round-off at the top end: the last cell with positive weight
-        c = cells - 1;
-        while (c > 0 && !(cell_weight_[c] > 0)) --c;
-      }
-      const float lo = c > 0 ? cell_cdf_[c - 1] : 0.0f;
-      const float ux = std::clamp((target - lo) / cell_weight_[c], 0.0f, 0x1.fffffep-1f);
-      const Point2 p = table_->sample_in_cell(c, {ux, u.y}, nullptr);
-      DirectionSample s;
-      s.direction = equal_area_square_to_sphere(p);
-      s.pdf = pdf(s.direction);  // the same function MIS evaluates (robust to round-off at cell edges)
-      s.cell = c;
-      if (!(s.pdf > 0) || !std::isfinite(s.pdf)) return {};
-      return s;
-    }
+    case Strategy::Oracle: return oracle_valid_ ? table_->sample(oracle_top_, u) : DirectionSample{};
   }
   return {};
 }
@@ -203,14 +180,7 @@ float LightSampler::pdf(Vec3 wi) const {
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->pdf(wi) : 0.0f;
     case Strategy::Product: return product_ ? product_->pdf(wi) : 0.0f;
-    case Strategy::Oracle: {
-      if (!oracle_valid_ || !is_valid_direction(wi)) return 0;
-      const Point2 p = equal_area_sphere_to_square(wi);
-      const int c = table_->cell_of(p);
-      if (!(cell_weight_[c] > 0)) return 0;
-      const float R = float(table_->top_resolution());
-      return cell_weight_[c] / cell_total_ * table_->pdf_in_cell(c, p) * R * R * kInv4Pi;
-    }
+    case Strategy::Oracle: return oracle_valid_ ? table_->pdf(oracle_top_, wi) : 0.0f;
   }
   return 0;
 }

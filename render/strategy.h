@@ -1,4 +1,4 @@
-// The light-sampling strategies compared by the renderer (DESIGN.md section 4). Each is a pair of
+// The light-sampling strategies compared by the renderer. Each is a pair of
 // (light distribution, whether BSDF sampling is combined with it by MIS):
 //
 //   bsdf      BSDF sampling only; no light sample.
@@ -107,9 +107,8 @@ class LightSampler {
   // oracle
   OracleOptions oracle_;
   std::vector<float> su_, sv_, dx_, dy_, dz_;  // per-evaluation scratch (R^2 * k^2)
-  std::vector<float> cell_weight_, cell_cdf_;  // R^2
-  std::vector<int> active_;                     // cells evaluated at this shading point
-  float cell_total_ = 0;
+  DiscreteDistribution2D oracle_top_;  // R x R cell weights
+  std::vector<int> active_;            // cells evaluated at this shading point
   bool oracle_valid_ = false;
 };
 

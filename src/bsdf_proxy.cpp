@@ -4,7 +4,7 @@
 #include <cmath>
 
 #define ENVPIS_KERNEL_NS scalar
-#include "kernels_impl.inl"
+#include "proxy_lobe_impl.h"
 #include "proxy_internal.h"
 
 namespace envpis {
@@ -100,7 +100,7 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
       // horizon: the refracted direction's limit at the critical angle, grazing, away from wo. cos_t
       // = 0 takes a_t' to the cap below. Folding this weight into the reflection lobe put the
       // product's samples where a closed object blocks them and left the transmitted light to BSDF
-      // sampling (rough glass under studio, path integrator: 7-10x the relMSE of mis; BENCHMARKS.md).
+      // sampling (docs/proxy.md, "Total internal reflection").
       p.t = normalize(tangent) * -1.0f;
     } else {
       // A (nearly) smooth one reflects everything beyond the critical angle. (T stays finite for the

@@ -43,16 +43,14 @@ bool equal_area_wrap(int n, int& x, int& y) {
   return x >= 0 && x < n && y >= 0 && y < n;
 }
 
-void equal_area_square_to_sphere(std::size_t n, const float* u, const float* v, float* x, float* y, float* z) {
-  detail::kernels_best().square_to_sphere(n, u, v, x, y, z);
+void equal_area_square_to_sphere(std::size_t n, const float* u, const float* v, float* x, float* y, float* z,
+                                 Simd simd) {
+  detail::kernels_for(simd).square_to_sphere(n, u, v, x, y, z);
 }
 
-void equal_area_sphere_to_square(std::size_t n, const float* x, const float* y, const float* z, float* u,
-                                 float* v) {
-  detail::kernels_best().sphere_to_square(n, x, y, z, u, v);
+void equal_area_sphere_to_square(std::size_t n, const float* x, const float* y, const float* z, float* u, float* v,
+                                 Simd simd) {
+  detail::kernels_for(simd).sphere_to_square(n, x, y, z, u, v);
 }
-
-const char* simd_name() { return detail::kernels_best().name; }
-int simd_width() { return detail::kernels_best().width; }
 
 }  // namespace envpis

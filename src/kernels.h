@@ -4,6 +4,12 @@
 #include <cstddef>
 #include <vector>
 
+#include "envpis/simd.h"
+
+namespace envpis {
+class ImportanceTable;
+}
+
 namespace envpis::detail {
 
 /// Top-level cells in structure-of-arrays form, padded to a multiple of kCellPad with zero-probability
@@ -51,8 +57,10 @@ const Kernels* kernels_avx512();  ///< nullptr when not compiled in
 std::vector<const Kernels*> kernels_available();
 /// The available set of that name ("scalar", "sse2", "avx2", "avx512"), or nullptr.
 const Kernels* kernels_named(const char* name);
-/// The widest available set, or the one ENVPIS_SIMD names (scalar, sse2, avx2, avx512) if available;
-/// chosen once.
-const Kernels& kernels_best();
+/// The set `simd` names (Best: the widest available); throws Error when it is not available.
+const Kernels& kernels_for(Simd simd);
+
+/// The table's top cells in the layout above (the table befriends this accessor).
+CellArrays cell_arrays(const ImportanceTable& table);
 
 }  // namespace envpis::detail

@@ -1,7 +1,8 @@
-#include <cstdlib>
 #include <cstring>
+#include <string>
 
-#include "envpis/equal_area.h"
+#include "envpis/common.h"
+#include "envpis/simd.h"
 #include "kernels.h"
 
 namespace envpis::detail {
@@ -46,15 +47,41 @@ const Kernels* kernels_named(const char* name) {
   return nullptr;
 }
 
-static const Kernels& choose() {
-  if (const char* force = std::getenv("ENVPIS_SIMD"))
-    if (const Kernels* k = kernels_named(force)) return *k;
-  return *kernels_available().back();
-}
-
-const Kernels& kernels_best() {
-  static const Kernels& k = choose();
-  return k;
+const Kernels& kernels_for(Simd simd) {
+  static const Kernels& widest = *kernels_available().back();
+  if (simd == Simd::Best) return widest;
+  if (simd == Simd::Scalar) return kernels_scalar();
+  if (const Kernels* k = kernels_named(to_string(simd))) return *k;
+  throw Error(std::string("SIMD instruction set ") + to_string(simd) + " is not available on this CPU or build");
 }
 
 }  // namespace envpis::detail
+
+namespace envpis {
+
+Simd parse_simd(const std::string& name) {
+  for (Simd s : {Simd::Best, Simd::Scalar, Simd::SSE2, Simd::AVX2, Simd::AVX512})
+    if (name == to_string(s)) return s;
+  throw Error("unknown SIMD instruction set '" + name + "' (best, scalar, sse2, avx2, avx512)");
+}
+
+const char* to_string(Simd simd) {
+  switch (simd) {
+    case Simd::Best: return "best";
+    case Simd::Scalar: return "scalar";
+    case Simd::SSE2: return "sse2";
+    case Simd::AVX2: return "avx2";
+    case Simd::AVX512: return "avx512";
+  }
+  return "?";
+}
+
+bool simd_supported(Simd simd) {
+  return simd == Simd::Best || simd == Simd::Scalar || detail::kernels_named(to_string(simd)) != nullptr;
+}
+
+Simd simd_resolve(Simd simd) { return parse_simd(detail::kernels_for(simd).name); }
+
+int simd_width(Simd simd) { return detail::kernels_for(simd).width; }
+
+}  // namespace envpis

@@ -1,7 +1,9 @@
 // Internal: a handful of operations written once for `float` (the scalar reference) and for
 // std::experimental::simd<float, Abi> (SSE2 / AVX2 / AVX-512 lanes), so every kernel has one source.
 // Included once per instruction set, inside that set's own namespace (ENVPIS_KERNEL_NS), so that no
-// inline function compiled for AVX2 can be merged by the linker with its SSE2 or scalar twin.
+// inline function compiled for AVX2 can be merged by the linker with its SSE2 or scalar twin. (A
+// translation unit uses one set, so #pragma once holds.)
+#pragma once
 
 #include <algorithm>
 #include <cmath>

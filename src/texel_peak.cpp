@@ -1,13 +1,13 @@
 #include "texel_peak.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
 #include "envpis/equal_area.h"
+#include "parallel.h"
 
 namespace envpis::detail {
 
@@ -112,12 +112,12 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
   std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
   const float inv_n = 1.0f / float(N);
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, N), [&](const tbb::blocked_range<int>& rows) {
+  detail::parallel_for(0, N, [&](int row_begin, int row_end) {
     // Outline points are shared: the corners and horizontal midpoints lie on the lines y and y + 1
     // (2N + 1 points each), the vertical midpoints on the line y + 1/2 (N + 1 points).
     Line top, mid, bottom;
-    map_line(map, latlong, float(rows.begin()) * inv_n, 2 * N + 1, 0.5f * inv_n, top);
-    for (int y = rows.begin(); y < rows.end(); ++y) {
+    map_line(map, latlong, float(row_begin) * inv_n, 2 * N + 1, 0.5f * inv_n, top);
+    for (int y = row_begin; y < row_end; ++y) {
       map_line(map, latlong, (float(y) + 0.5f) * inv_n, N + 1, inv_n, mid);
       map_line(map, latlong, float(y + 1) * inv_n, 2 * N + 1, 0.5f * inv_n, bottom);
       for (int x = 0; x < N; ++x) {

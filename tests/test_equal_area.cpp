@@ -153,5 +153,5 @@ TEST(EqualArea, SimdMatchesScalar) {
     ASSERT_NEAR(bv[i], p.y, 1e-6f) << i;
   }
   EXPECT_GE(simd_width(), 1);
-  std::printf("SIMD path: %s (%d lanes)\n", simd_name(), simd_width());
+  std::printf("SIMD path: %s (%d lanes)\n", to_string(simd_resolve(Simd::Best)), simd_width());
 }

@@ -144,7 +144,7 @@ TEST(ProductSampler, SimdWeightsEqualScalarReference) {
   for (const auto& [name, table] : tables) {
     ProductSamplerOptions simd_opt, scalar_opt;  // the paper's top level: the kernels' weights as they are
     simd_opt.env_floor = scalar_opt.env_floor = 0;
-    scalar_opt.simd = false;
+    scalar_opt.simd = Simd::Scalar;
     ProductSampler simd(*table, simd_opt), scalar(*table, scalar_opt);
     for (const Config& c : random_configs(40, 3)) {
       ASSERT_TRUE(simd.prepare(c.n, c.wo, c.proxy));
@@ -168,7 +168,7 @@ TEST(ProductSampler, SimdWeightsEqualScalarReference) {
   }
 }
 
-// ProductSampler only runs the widest kernel set the CPU has (kernels_best()); this runs every set this
+// ProductSampler runs one kernel set (options.simd, the widest by default); this runs every set this
 // build has and this CPU can run (scalar, SSE2, AVX2, AVX-512) on the product weights and both
 // mappings, against the scalar kernels, over the cell arrays of real tables and the random proxies.
 TEST(ProductSampler, EveryAvailableKernelSetMatchesTheScalarKernels) {
@@ -177,12 +177,10 @@ TEST(ProductSampler, EveryAvailableKernelSetMatchesTheScalarKernels) {
   const detail::Kernels& ref = detail::kernels_scalar();
   std::string names;
   for (const detail::Kernels* k : sets) names += std::string(" ") + k->name;
-  std::printf("kernel sets on this CPU:%s; ProductSampler uses %s\n", names.c_str(), simd_name());
+  std::printf("kernel sets on this CPU:%s; ProductSampler uses %s\n", names.c_str(), to_string(simd_resolve(Simd::Best)));
   for (const auto& [name, table] : test_tables()) {
-    const detail::CellArrays cells{table->soa_axis_x(), table->soa_axis_y(), table->soa_axis_z(),
-                                   table->soa_cos(),    table->soa_sin(),    table->soa_prob(),
-                                   table->padded_cell_count()};
-    std::vector<float> expected(table->padded_cell_count()), got(table->padded_cell_count());
+    const detail::CellArrays cells = detail::cell_arrays(*table);
+    std::vector<float> expected(cells.padded_count), got(cells.padded_count);
     for (const Config& c : random_configs(30, 17)) {
       const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo);
       ASSERT_TRUE(pp.valid());
@@ -192,7 +190,7 @@ TEST(ProductSampler, EveryAvailableKernelSetMatchesTheScalarKernels) {
       for (float w : expected) total += w;
       for (const detail::Kernels* k : sets) {
         k->product_weights(cells, lobes, got.data());
-        for (int i = 0; i < table->padded_cell_count(); ++i) {
+        for (int i = 0; i < cells.padded_count; ++i) {
           // Hardware estimates of 1/sqrt and 1/x (relative error < 3.7e-4 each, src/simd_ops.h).
           ASSERT_NEAR(got[i], expected[i], 2e-3 * std::max(double(expected[i]), 1e-6 * total))
               << k->name << " " << name << " " << c.label << " cell " << i;

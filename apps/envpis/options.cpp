@@ -168,6 +168,15 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
+  // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for
+  // benchmarking and debugging; the library itself never reads the environment.
+  if (const char* simd = std::getenv("ENVPIS_SIMD")) {
+    try {
+      o.product.simd = simd_resolve(parse_simd(simd));
+    } catch (const Error& e) {
+      throw Error(std::string("ENVPIS_SIMD: ") + e.what());
+    }
+  }
 }
 
 int SceneOptionArgs::closed_surfaces_override() const {

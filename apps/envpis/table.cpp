@@ -102,7 +102,7 @@ double prepare_product(ProductSampler& sampler, const TableSettings& s) {
     std::fprintf(stderr,
                  "envpis table: warning: the proxy gives no cell a positive weight (all-zero proxy?): the "
                  "product sampler falls back to environment-only sampling\n");
-  std::printf("product: prepare %.0f ns per shading point (%s)\n", prepare_ns, simd_name());
+  std::printf("product: prepare %.0f ns per shading point (%s)\n", prepare_ns, to_string(sampler.simd()));
   return prepare_ns;
 }
 
@@ -233,7 +233,7 @@ Json shading_json(const ProductSampler& sampler, const TableSettings& s, double 
             {"reflection_axis", vec_json(pp.r)}, {"refraction_axis", vec_json(pp.t)}}},
           {"environment_fallback", sampler.uses_environment_fallback()},
           {"prepare_ns", prepare_ns},
-          {"simd", simd_name()}};
+          {"simd", to_string(sampler.simd())}};
 }
 
 Json samples_json(const SampleStats& st, const TableSettings& s) {

@@ -23,16 +23,15 @@
 //   Abstract:           a_r' = a_r sqrt(4 cos_o),   a_t' = a_t (cos_t eta + cos_o) / sqrt(cos_t eta^2)
 //   Hybrid (default):   the slides' a_r'; the abstract's a_t' for eta > 1, the slides' for eta < 1
 // where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is what
-// measured best (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes; docs/proxy.md): for
-// reflection the abstract's a_r' is far too narrow at grazing views (4x the cell-level variance at 80
-// degrees); for refraction into a denser medium the slides' a_t' is about twice too wide, out of one
-// the abstract's is about twice too narrow. Then a' is clamped to
-// [min_alpha, max_alpha]: the floor is the low-roughness remedy of DESIGN.md section 8 (a near-mirror
-// lobe gives its peak value to every cell its axis touches and starves the cells reached only by its
-// tail); the cap keeps rough lobes peaked: at a' = 1 the GGX-like shape is flat (and above 1 it would
-// peak at the horizon), so with the slides' 2a every a >= 0.5 became a flat proxy that no longer
-// favours the lobe's side of the sky (docs/proxy.md, "Roughness cap": max_alpha 0.8 took fig1's
-// alpha 0.5 sphere from 1.09x to 1.75x less relMSE than mis, pooled over 8 maps x 3 seeds).
+// covers the true GGX lobes best (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes;
+// measurements in docs/proxy.md): the abstract's a_r' is too narrow at grazing views, and for
+// refraction each transform is too wide on one side of eta = 1 and too narrow on the other. Then a' is
+// clamped to [min_alpha, max_alpha]: the floor is a low-roughness remedy (a near-mirror lobe gives its
+// peak value to every cell its axis touches and starves the cells reached only by its tail;
+// docs/decisions.md, "The roughness floor"); the cap keeps rough lobes peaked: at a' = 1 the GGX-like
+// shape is flat (and above 1 it would peak at the horizon), so with the slides' 2a every a >= 0.5
+// would become a flat proxy that no longer favours the lobe's side of the sky (docs/proxy.md,
+// "Roughness cap").
 //
 // Special cases (all handled inside prepare_proxy):
 //   - wo below the surface (N.wo < 0): N is flipped and eta inverted, so the proxy describes the

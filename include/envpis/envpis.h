@@ -13,11 +13,13 @@
 
 #include "envpis/bsdf_proxy.h"
 #include "envpis/common.h"
+#include "envpis/discrete_distribution_2d.h"
 #include "envpis/environment_map.h"
 #include "envpis/equal_area.h"
 #include "envpis/importance_table.h"
 #include "envpis/mis.h"
 #include "envpis/product_sampler.h"
+#include "envpis/simd.h"
 
 namespace envpis {
 constexpr const char* kVersion = "0.1.0";

@@ -14,6 +14,7 @@
 #include <cstddef>
 
 #include "envpis/common.h"
+#include "envpis/simd.h"
 
 namespace envpis {
 
@@ -31,19 +32,11 @@ Point2 equal_area_sphere_to_square(Vec3 d);
 /// than one image width outside (the caller clamps then).
 bool equal_area_wrap(int n, int& x, int& y);
 
-/// Batched (structure-of-arrays) versions, vectorized with the widest SIMD unit the CPU has
-/// (AVX-512, else AVX2+FMA, else SSE2, else scalar; chosen once at run time). Arrays may alias neither each other
-/// nor be misaligned-sensitive: any alignment works.
+/// Batched (structure-of-arrays) versions, vectorized with the instruction set `simd` (envpis/simd.h;
+/// by default the widest this CPU runs). Any alignment works; the arrays must not overlap.
 void equal_area_square_to_sphere(std::size_t n, const float* u, const float* v, float* x, float* y,
-                                 float* z);
+                                 float* z, Simd simd = Simd::Best);
 void equal_area_sphere_to_square(std::size_t n, const float* x, const float* y, const float* z, float* u,
-                                 float* v);
-
-/// Name and lane count of the SIMD path the batched functions and the product sampler use
-/// ("avx512" / 16, "avx2" / 8, "sse2" / 4 or "scalar" / 1). ENVPIS_SIMD=scalar|sse2|avx2|avx512 in the
-/// environment picks that one instead, if this CPU runs it (for benchmarking and debugging, or to keep
-/// 512-bit instructions off CPUs that lower their clock for them).
-const char* simd_name();
-int simd_width();
+                                 float* v, Simd simd = Simd::Best);
 
 }  // namespace envpis

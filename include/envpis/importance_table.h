@@ -11,8 +11,8 @@
 // has more texels (then N^2 >= texel count: 4096x2048 -> 2904). ImportanceTableOptions::fine_resolution
 // overrides it (rounded up to a multiple of T). Why twice: table texels never line up with a lat-long
 // map's texels, so at equal resolution each table texel mixes several map texels and its importance
-// misstates what eval returns inside it; at twice the resolution sunrise's relMSE on fig1 halves
-// (BENCHMARKS.md).
+// misstates what eval returns inside it (docs/decisions.md, "A fine table twice the map's resolution",
+// has the measurement).
 //
 // Importance of a fine texel: the average of the RGB channels of the radiance, averaged over the
 // texel by stratified bilinear look-ups (or, where map texels are much smaller than table texels, by
@@ -34,12 +34,18 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "envpis/common.h"
+#include "envpis/discrete_distribution_2d.h"
 #include "envpis/environment_map.h"
 
 namespace envpis {
+
+namespace detail {
+class FineLevel;
+}
 
 struct ImportanceTableOptions {
   int top_resolution = 12;  ///< T, 1..256
@@ -66,9 +72,15 @@ struct Cone {
   float sin_half_angle = 0;
 };
 
+class ImportanceTable;
+namespace detail {
+struct CellArrays;
+CellArrays cell_arrays(const ImportanceTable& table);  // the SIMD kernels' view (src/kernels.h)
+}  // namespace detail
+
 class ImportanceTable {
  public:
-  /// Builds the table (in parallel with TBB). Throws Error for invalid options.
+  /// Builds the table (in parallel when the library has TBB). Throws Error for invalid options.
   /// An all-black map builds an empty() table: sample() then returns no sample and pdf() is 0;
   /// renderers should fall back to BSDF sampling (the environment contributes nothing anyway).
   explicit ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options = {});
@@ -82,18 +94,37 @@ class ImportanceTable {
   double integral() const { return integral_; }
 
   /// Environment-only importance sampling: direction with probability proportional to importance.
-  DirectionSample sample(Point2 u) const;
+  DirectionSample sample(Point2 u) const { return sample(top_, u); }
   /// Density (solid angle) of sample() at direction d. 0 for an invalid d or an empty table.
-  float pdf(Vec3 d) const;
+  float pdf(Vec3 d) const { return pdf(top_, d); }
+  /// The u that sample() maps to direction d (up to round-off), e.g. to test stratification.
+  Point2 invert(Vec3 d) const { return invert(top_, d); }
+
+  /// Two-level sampling with any top level over this table's T x T cells (the product sampler's,
+  /// a renderer's own): the cell from `top` with u, then a fine texel of that cell with u's remainder.
+  /// The density of a direction d in cell c is top.pmf(c) times the cell's fine density, in solid
+  /// angle (solid_angle_pdf). `top` must be T x T; an invalid `top` or an empty table gives pdf 0.
+  DirectionSample sample(const DiscreteDistribution2D& top, Point2 u) const;
+  float pdf(const DiscreteDistribution2D& top, Vec3 d) const;
+  Point2 invert(const DiscreteDistribution2D& top, Vec3 d) const;
+  /// The environment's own top level: cell (x, y) has probability E[c], c = y * T + x.
+  const DiscreteDistribution2D& top_level() const { return top_; }
 
   /// Top cell index (y * T + x) that contains equal-area point p / direction d.
   int cell_of(Point2 p) const;
   int cell_of_direction(Vec3 d) const;
   /// Probability E[c] of top cell c (sums to 1 over the cells, all 0 when empty()).
-  float cell_probability(int c) const { return cell_prob_[c]; }
+  float cell_probability(int c) const { return top_.pmf(c); }
   const Cone& cell_cone(int c) const { return cones_[c]; }
   /// Importance of fine texel (x, y), 0 <= x, y < N (equal-area square, y down).
   float importance(int x, int y) const;
+  /// Density of the fine distribution of cell c at equal-area point p, normalized over the cell's area.
+  float pdf_in_cell(int c, Point2 p) const;
+  /// Solid-angle density of a direction in a cell of probability cell_pmf whose fine density (over
+  /// the cell's area) is pdf_in_cell: a top cell covers 4 pi / T^2 steradians.
+  float solid_angle_pdf(float cell_pmf, float pdf_in_cell) const {
+    return cell_pmf * pdf_in_cell * float(T_) * float(T_) * kInv4Pi;
+  }
 
   /// Bytes held by the table.
   std::size_t bytes_used() const;
@@ -103,42 +134,19 @@ class ImportanceTable {
   /// Wall seconds the build took.
   double build_seconds() const { return build_seconds_; }
 
-  // ---- for ProductSampler (and users building their own top-level distributions) ----
-  /// Samples the fine distribution of top cell c with u in [0,1)^2; returns the equal-area point and
-  /// sets *pdf_in_cell to the density inside the cell (over the cell's area, the cell having area 1).
-  /// *interior (if given) tells whether the point is far enough inside its texel (2% of a texel) that
-  /// the direction it maps to maps back into the same texel: then *pdf_in_cell equals
-  /// pdf_in_cell(c, equal_area_sphere_to_square(direction)) exactly, and callers can skip that.
-  Point2 sample_in_cell(int c, Point2 u, float* pdf_in_cell, bool* interior = nullptr) const;
-  /// Density of the fine distribution of cell c at equal-area point p, normalized over the cell's area.
-  float pdf_in_cell(int c, Point2 p) const;
-  /// Structure-of-arrays cone and probability data, padded with zero cells to a multiple of 16.
-  const float* soa_axis_x() const { return soa_[0].data(); }
-  const float* soa_axis_y() const { return soa_[1].data(); }
-  const float* soa_axis_z() const { return soa_[2].data(); }
-  const float* soa_cos() const { return soa_[3].data(); }
-  const float* soa_sin() const { return soa_[4].data(); }
-  const float* soa_prob() const { return soa_[5].data(); }
-  int padded_cell_count() const { return padded_; }
-
  private:
-  void build_importance(const EnvironmentMap& map, float floor, float peak_ratio, bool compensated);
-  void build_cells();
+  friend detail::CellArrays detail::cell_arrays(const ImportanceTable& table);
+  void build_top_level(const std::vector<double>& cell_sums);
   void build_cones();
-  std::size_t texel_index(int x, int y) const;  // index into func_/cdf_ (cell-major layout)
 
-  int T_ = 12, F_ = 1, N_ = 12, padded_ = 16;
+  int T_ = 12, F_ = 1, N_ = 12;
   bool empty_ = true;
   double integral_ = 0;
   double build_seconds_ = 0;
-  std::vector<float> func_;  // N^2 importance values, laid out cell by cell, row-major inside a cell
-  std::vector<float> cdf_;   // N^2 running sums inside each cell (row-major), normalized to end at 1
-  std::vector<float> cell_sum_;   // per cell: sum of func_ over the cell
-  std::vector<float> cell_prob_;  // per cell: E[c]
-  std::vector<float> top_row_sum_;  // T: row totals of E[c], for environment-only sampling
-  std::vector<float> top_row_cdf_;  // T: their running sums
+  std::shared_ptr<const detail::FineLevel> fine_;  // immutable: copies of the table share it
+  DiscreteDistribution2D top_;
   std::vector<Cone> cones_;
-  std::vector<float> soa_[6];
+  std::vector<float> soa_[6];  // cone axis x, y, z, cos, sin, E[c]; padded like top_.values()
 };
 
 }  // namespace envpis

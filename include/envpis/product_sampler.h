@@ -33,8 +33,13 @@
 
 #include "envpis/bsdf_proxy.h"
 #include "envpis/importance_table.h"
+#include "envpis/simd.h"
 
 namespace envpis {
+
+namespace detail {
+struct Kernels;
+}
 
 struct ProductSamplerOptions {
   ProxyOptions proxy;
@@ -42,7 +47,7 @@ struct ProductSamplerOptions {
   /// r: every cell the proxy sees keeps at least r times its environment share (see above), [0, 1];
   /// 0 is the paper's top level.
   float env_floor = 0.125f;
-  bool simd = true;      ///< false: the scalar reference kernel (for tests and benchmarks)
+  Simd simd = Simd::Best;  ///< instruction set of the weights kernel (envpis/simd.h)
 };
 
 class ProductSampler {
@@ -64,22 +69,21 @@ class ProductSampler {
   float pdf(Vec3 wi) const;
 
   /// Normalized top-level probability of cell c for the current shading point.
-  float cell_probability(int c) const { return prob_[c] * inv_total_; }
+  float cell_probability(int c) const { return top_.pmf(c); }
+  /// The current shading point's top level (T x T, the cells' probabilities).
+  const DiscreteDistribution2D& top_level() const { return top_; }
   const PreparedProxy& prepared_proxy() const { return prepared_; }
   const ImportanceTable& table() const { return *table_; }
   const ProductSamplerOptions& options() const { return options_; }
+  /// The instruction set the weights kernel runs (options().simd resolved on this CPU).
+  Simd simd() const;
 
  private:
-  float row_sums();  // fills row_sum_ and row_cdf_ from prob_, returns the total
-
   const ImportanceTable* table_;
   ProductSamplerOptions options_;
-  const void* kernels_;  // detail::Kernels
+  const detail::Kernels* kernels_;
   PreparedProxy prepared_;
-  std::vector<float> prob_;  // padded T^2: product weights (unnormalized)
-  std::vector<float> row_sum_;  // T: each row's total of prob_
-  std::vector<float> row_cdf_;  // T: running sums of the row totals
-  float total_ = 0, inv_total_ = 0;
+  DiscreteDistribution2D top_;  // P[c], unnormalized (its pmf normalizes)
   bool valid_ = false;
   bool fallback_ = false;
 };

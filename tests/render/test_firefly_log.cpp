@@ -95,7 +95,7 @@ void expect_consistent(const FireflyRecord& r, const StrategyTables& tables, con
   EXPECT_EQ(r.texel_importance, table.importance(r.texel_x, r.texel_y));
   EXPECT_EQ(r.table_pdf, table.pdf(r.direction));
   EXPECT_EQ(r.cell_env_probability, table.cell_probability(r.cell));
-  EXPECT_TRUE(near(r.cell_probability * r.pdf_in_cell * float(T * T) * kInv4Pi, r.light_pdf, 1e-5f));
+  EXPECT_TRUE(near(table.solid_angle_pdf(r.cell_probability, r.pdf_in_cell), r.light_pdf, 1e-5f));
 }
 
 // With the old table some light samples land where eval returns far more than the texel's importance:

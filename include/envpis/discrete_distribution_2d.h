@@ -1,0 +1,109 @@
+// A discrete distribution over the cells of a w x h grid that also hands back where inside its cell a
+// sample landed, so a second level (a fine table, a warp) can reuse the remainder of u and stratified
+// u stay stratified (as pbrt-v4's PiecewiseConstant2D and Mitsuba's DiscreteDistribution2D do).
+//
+// Layout: row totals and their running sums only. A sample finds its row among the h running sums
+// (binary search), then scans that row's w masses. No per-cell running sums are stored, so rebuilding
+// the distribution per shading point (the product sampler's top level) costs one pass over the masses.
+//
+// Rebuilding without allocation: write the masses through values(), then call update(). values() has
+// room for padded_size() floats, w * h rounded up to a multiple of 16, so vector code can store whole
+// registers; entries past w * h are ignored.
+//
+// Masses must be >= 0. Cells whose mass is 0 or NaN are never chosen. A distribution whose total is
+// not a positive normal float (all zero, NaN, Inf, or below FLT_MIN, whose reciprocal would overflow)
+// is not valid(): sample() and pmf() must not be used then.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include "envpis/common.h"
+
+namespace envpis {
+
+class DiscreteDistribution2D {
+ public:
+  struct Sample {
+    int x = 0, y = 0;  ///< the chosen cell
+    Point2 offset;     ///< where inside it, in [0,1)^2: u's remainder after the choice
+    float pmf = 0;     ///< probability of the cell
+  };
+
+  DiscreteDistribution2D() = default;
+  /// w x h cells of mass 0 (not valid() until masses are written and update() is called).
+  DiscreteDistribution2D(int width, int height);
+  /// Copies w * h row-major masses and calls update().
+  DiscreteDistribution2D(const float* masses, int width, int height);
+
+  int width() const { return w_; }
+  int height() const { return h_; }
+  int padded_size() const { return static_cast<int>(mass_.size()); }
+  float* values() { return mass_.data(); }
+  const float* values() const { return mass_.data(); }
+
+  /// Recomputes the row totals and their running sums from values(); returns the total.
+  float update();
+  float total() const { return total_; }
+  bool valid() const { return total_ >= std::numeric_limits<float>::min() && std::isfinite(total_); }
+
+  /// Probability of cell (x, y), or of the cell with row-major index i = y * w + x.
+  float pmf(int i) const { return mass_[static_cast<std::size_t>(i)] * inv_total_; }
+  float pmf(int x, int y) const { return pmf(y * w_ + x); }
+
+  /// A row with u.y, then a cell of the row with u.x; u in [0,1)^2 (clamped).
+  Sample sample(Point2 u) const;
+  /// The u that sample() maps to cell (x, y) and `offset`; inverse of sample() on cells with mass.
+  Point2 invert(int x, int y, Point2 offset) const;
+
+ private:
+  int w_ = 0, h_ = 0;
+  std::vector<float> mass_;     // padded_size() entries, w * h used
+  std::vector<float> row_sum_;  // h: each row's total mass
+  std::vector<float> row_cdf_;  // h: running sums of the row totals (the last is total_)
+  float total_ = 0, inv_total_ = 0;
+};
+
+namespace detail {
+constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+inline float clamp_unit(float u) { return std::min(std::max(u, 0.0f), kOneMinusEpsilon); }
+}  // namespace detail
+
+// Inline: the product sampler draws one sample per shading point right after update().
+inline DiscreteDistribution2D::Sample DiscreteDistribution2D::sample(Point2 u) const {
+  const float uy = detail::clamp_unit(u.y) * total_, ux = detail::clamp_unit(u.x);
+  const float* rows = row_cdf_.data();
+  Sample s;
+  s.y = static_cast<int>(std::min<long>(std::upper_bound(rows, rows + h_, uy) - rows, h_ - 1));
+  while (s.y > 0 && !(row_sum_[s.y] > 0)) --s.y;  // rounding past the last row with mass
+  const float row_start = s.y > 0 ? rows[s.y - 1] : 0.0f;
+  const float row_mass = row_sum_[s.y];
+  s.offset.y = row_mass > 0 ? detail::clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  const float target = ux * row_mass;
+  const float* row = mass_.data() + static_cast<std::size_t>(s.y) * w_;
+  // The first cell whose running sum exceeds the target; if rounding leaves the target at the row's
+  // end, the last cell with mass. Cells without mass are never chosen.
+  float run = 0, start = 0;
+  s.x = -1;
+  for (int x = 0; x < w_; ++x) {
+    const float m = row[x];
+    if (!(m > 0)) continue;
+    s.x = x;
+    start = run;
+    run += m;
+    if (run > target) break;
+  }
+  if (s.x < 0) {  // an empty row: only when the whole distribution is (not valid())
+    s.x = 0;
+    s.offset.x = 0.5f;
+    return s;
+  }
+  s.offset.x = detail::clamp_unit((target - start) / row[s.x]);
+  s.pmf = row[s.x] * inv_total_;
+  return s;
+}
+
+}  // namespace envpis

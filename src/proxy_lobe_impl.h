@@ -1,0 +1,100 @@
+// Internal: the proxy lobes' shapes evaluated over a top cell's bounding cone (kernels.h, LobeParams),
+// one body for `float` (PreparedProxy::eval_cone) and for every SIMD width, and the product weights
+// loop over the cells. Included per instruction set inside ENVPIS_KERNEL_NS (see simd_ops.h).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <experimental/simd>
+
+#include "kernels.h"
+#include "simd_ops.h"
+
+namespace envpis::detail::ENVPIS_KERNEL_NS {
+
+using namespace simd;
+
+/// cos of the angle between `axis` and the direction of the cone (axis a, half-angle b) closest to it:
+/// max(0, t - b) where cos t = c.
+template <class V>
+ENVPIS_INLINE V closest_cos(V c, V cosb, V sinb) {
+  const V s = vsqrt_fast(vmax(V(1.0f) - c * c, V(0.0f)));
+  return select(c >= cosb, V(1.0f), c * cosb + s * sinb);
+}
+
+/// The simplified GGX lobe coef / (1 + m c^2)^2 for c > 0; beyond 90 degrees from the lobe axis it keeps
+/// its value at 90 degrees (the lobe's tail, coef = w a^2 / pi) instead of rising again, so that every
+/// direction on the lobe's side of the surface keeps a small positive weight (true GGX lobes reach the
+/// whole hemisphere through the half-vector, e.g. back-scattering at grazing views).
+template <class V>
+ENVPIS_INLINE V ggx_like(V c, V coef, V m) {
+  const V cp = vmax(c, V(0.0f));
+  const V d = V(1.0f) + m * cp * cp;  // >= a'^2 >= 1e-6
+  return coef * vrcp_fast(d * d);
+}
+
+/// LobeParams broadcast to V.
+template <class V>
+struct LobeV {
+  V nx, ny, nz, rx, ry, rz, tx, ty, tz, kd, kt, cr, mr, ct, mt;
+  explicit LobeV(const LobeParams& p)
+      : nx(p.n[0]), ny(p.n[1]), nz(p.n[2]), rx(p.r[0]), ry(p.r[1]), rz(p.r[2]), tx(p.t[0]), ty(p.t[1]),
+        tz(p.t[2]), kd(p.kd), kt(p.kt), cr(p.cr), mr(p.mr), ct(p.ct), mt(p.mt) {}
+};
+
+/// The proxy's value for a cone (axis a, half-angle b): every lobe evaluated at the cone's direction
+/// closest to its axis. kTransmission = false skips the lobes below the surface (translucent and
+/// refraction), for the common opaque case; it must only be used when both their weights are 0.
+/// kDiffuse = false skips the cosine lobes (diffuse and translucent); only when both their weights are 0.
+///
+/// The cone reaches above the surface (some direction at less than 90 degrees from N) exactly when
+/// angle(N, a) < 90 + b, i.e. N.a > cos(90 + b) = -sin b; below it when N.a < sin b. The gates test that
+/// directly, so the sine of angle(N, a) is only computed for the cosine lobes' values.
+template <class V, bool kTransmission = true, bool kDiffuse = true>
+ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
+  const V cn = l.nx * ax + l.ny * ay + l.nz * az;
+  const V cR = closest_cos(l.rx * ax + l.ry * ay + l.rz * az, cb, sb);
+  V value = ggx_like(cR, l.cr, l.mr);
+  V sn(0.0f);
+  if constexpr (kDiffuse) {
+    // N and -N make supplementary angles with the axis: one sine serves both.
+    sn = vsqrt_fast(vmax(V(1.0f) - cn * cn, V(0.0f)));
+    value = value + l.kd * select(cn >= cb, V(1.0f), cn * cb + sn * sb);  // towards N
+  }
+  value = select(cn > -sb, value, V(0.0f));
+  if constexpr (kTransmission) {
+    const V cT = closest_cos(l.tx * ax + l.ty * ay + l.tz * az, cb, sb);
+    V below = ggx_like(cT, l.ct, l.mt);
+    if constexpr (kDiffuse) below = below + l.kt * select(-cn >= cb, V(1.0f), sn * sb - cn * cb);  // towards -N
+    value = value + select(cn < sb, below, V(0.0f));
+  }
+  return value;
+}
+
+template <class V, bool kTransmission, bool kDiffuse>
+ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
+  constexpr std::size_t W = lanes<V>();
+  const LobeV<V> l(p);
+  for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
+    const V value = proxy_cone_value<V, kTransmission, kDiffuse>(
+        l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
+        load_any<V>(cells.cosb + i), load_any<V>(cells.sinb + i));
+    store(value * load_any<V>(cells.prob + i), out + i);
+  }
+}
+
+template <class V>
+__attribute__((flatten)) void product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
+  const bool transmission = p.kt > 0.0f || p.ct > 0.0f;
+  const bool diffuse = p.kd > 0.0f || p.kt > 0.0f;
+  if (transmission) {
+    if (diffuse) product_weights_impl<V, true, true>(cells, p, out);
+    else product_weights_impl<V, true, false>(cells, p, out);
+  } else {
+    if (diffuse) product_weights_impl<V, false, true>(cells, p, out);
+    else product_weights_impl<V, false, false>(cells, p, out);
+  }
+}
+
+}  // namespace envpis::detail::ENVPIS_KERNEL_NS

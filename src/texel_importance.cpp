@@ -1,0 +1,282 @@
+#include "texel_importance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "envpis/equal_area.h"
+#include "parallel.h"
+#include "texel_filter.h"
+#include "texel_peak.h"
+
+#define ENVPIS_KERNEL_NS scalar
+#include "simd_ops.h"
+
+namespace envpis::detail {
+
+namespace {
+
+// What every step needs to know about the map and the table.
+struct Setup {
+  const EnvironmentMap& map;
+  const FineLevel& fine;
+  int w, h, N;
+  bool latlong;
+  std::size_t total;      // N^2 table texels
+  double table_texel_sr;  // solid angle of a table texel
+  double ea_src_sr;       // solid angle of an equal-area map texel
+  std::vector<float> lum;  // the map texels' channel averages
+
+  Setup(const EnvironmentMap& m, const FineLevel& f)
+      : map(m), fine(f), w(m.width()), h(m.height()), N(f.resolution()), latlong(m.layout() != MapLayout::EqualArea),
+        total(static_cast<std::size_t>(N) * N), table_texel_sr(4.0 * kPi / double(total)),
+        ea_src_sr(4.0 * kPi / (double(w) * h)), lum(static_cast<std::size_t>(w) * h) {
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Rgb L = map.texel(x, y);
+        lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
+      }
+  }
+  float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
+  // Bilinear look-up of the channel average for a world direction, as EnvironmentMap::eval does it,
+  // with a fast polynomial atan2 for the lat-long angles.
+  float lookup(Vec3 world) const {
+    const Vec3 md = map.to_map(world);
+    const auto at = [this](int x, int y) { return lum_at(x, y); };
+    if (!latlong) {
+      const Point2 p = equal_area_sphere_to_square(md);
+      return bilinear_equal_area(at, w, p.x, p.y);
+    }
+    float phi = scalar::simd::atan2_fast(md.y, md.x);
+    if (phi < 0) phi += 2 * kPi;
+    const float theta = scalar::simd::atan2_fast(std::sqrt(md.x * md.x + md.y * md.y), md.z);
+    return bilinear_latlong(at, w, h, phi * (0.5f * kInvPi), theta * kInvPi);
+  }
+};
+
+// 1. Gather: the average of s x s stratified bilinear look-ups over each table texel. Accurate where
+// map texels are at least about as large as table texels. Also marks the texels where map texels are
+// smaller than half a table texel (`small`).
+void gather(const Setup& su, std::vector<float>& out, std::vector<std::uint8_t>& small) {
+  const int N = su.N;
+  // A lat-long texel at polar angle theta is smaller than half a table texel when sin(theta) is below
+  // this (its solid angle is about (2 pi / w)(pi / h) sin theta).
+  const float small_sin =
+      su.latlong ? static_cast<float>(0.5 * su.table_texel_sr / ((2.0 * kPi / su.w) * (kPi / su.h))) : 0.0f;
+  const bool all_small = !su.latlong && su.ea_src_sr < 0.5 * su.table_texel_sr;
+  const double ratio = double(su.w) * su.h / double(su.total);
+  const int s = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio) - 0.25)), 1, 8);
+  out.assign(su.total, 0.0f);
+  small.assign(su.total, 0);
+  const float inv = 1.0f / float(N * s);
+  parallel_for(0, N, [&](int row_begin, int row_end) {
+    const std::size_t m = static_cast<std::size_t>(N) * s;
+    std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m);
+    for (int y = row_begin; y < row_end; ++y) {
+      for (int sy = 0; sy < s; ++sy) {
+        const float v = (float(y * s + sy) + 0.5f) * inv;
+        for (std::size_t i = 0; i < m; ++i) {
+          pu[i] = (float(i) + 0.5f) * inv;
+          pv[i] = v;
+        }
+        equal_area_square_to_sphere(m, pu.data(), pv.data(), dx.data(), dy.data(), dz.data());
+        for (int x = 0; x < N; ++x) {
+          double acc = 0;
+          for (int sx = 0; sx < s; ++sx) {
+            const std::size_t i = static_cast<std::size_t>(x) * s + sx;
+            acc += su.lookup({dx[i], dy[i], dz[i]});
+          }
+          out[su.fine.index(x, y)] += static_cast<float>(acc / (double(s) * s));
+          if (sy == s / 2) {
+            const std::size_t i = static_cast<std::size_t>(x) * s + s / 2;
+            const float mz = su.map.to_map({dx[i], dy[i], dz[i]}).z;
+            small[su.fine.index(x, y)] = all_small || 1.0f - mz * mz < small_sin * small_sin;
+          }
+        }
+      }
+    }
+  });
+}
+
+// Sub-texel splits of map row y for the splat: only where the splat is used (map texels smaller than
+// half a table texel); elsewhere one point per map texel is enough for its role as a fallback.
+void splat_splits(const Setup& su, int y, int& kx, int& ky) {
+  const double table_side = std::sqrt(su.table_texel_sr);
+  const double theta = kPi * (y + 0.5) / su.h;
+  const double height = su.latlong ? kPi / su.h : std::sqrt(su.ea_src_sr);
+  const double width = su.latlong ? 2.0 * kPi / su.w * std::max(std::sin(theta), std::sin(0.5 * kPi / su.h))
+                                  : std::sqrt(su.ea_src_sr);
+  kx = ky = 1;
+  if (width * height >= su.table_texel_sr) return;  // 2x margin over the small-texel threshold
+  kx = std::clamp(static_cast<int>(std::ceil(2.0 * width / table_side)), 1, 16);
+  ky = std::clamp(static_cast<int>(std::ceil(2.0 * height / table_side)), 1, 16);
+}
+
+// One map row's splat points: equal-area coordinates (u, v) and energy e (importance x solid angle).
+struct SplatRow {
+  std::vector<float> u, v, e;
+};
+
+void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const std::vector<float>& col_sin,
+               SplatRow& out, std::vector<float>& mx, std::vector<float>& my, std::vector<float>& mz) {
+  int kx, ky;
+  splat_splits(su, y, kx, ky);
+  const int w = su.w, h = su.h;
+  const std::size_t m = static_cast<std::size_t>(w) * kx * ky;
+  for (auto* a : {&mx, &my, &mz, &out.u, &out.v, &out.e}) a->resize(m);
+  std::size_t k = 0;
+  for (int j = 0; j < ky; ++j) {
+    const double v0 = (y + double(j) / ky) / h, v1 = (y + double(j + 1) / ky) / h;
+    const double sub_sr = su.latlong ? 2.0 * kPi / (double(w) * kx) * (std::cos(kPi * v0) - std::cos(kPi * v1))
+                                     : su.ea_src_sr / (double(kx) * ky);
+    const float st = static_cast<float>(std::sin(kPi * 0.5 * (v0 + v1)));
+    const float ct = static_cast<float>(std::cos(kPi * 0.5 * (v0 + v1)));
+    for (int x = 0; x < w; ++x) {
+      const float e = static_cast<float>(double(su.lum_at(x, y)) * sub_sr);
+      for (int i = 0; i < kx; ++i, ++k) {
+        Vec3 md;
+        if (su.latlong && kx == 1) {
+          md = {st * col_cos[x], st * col_sin[x], ct};
+        } else {
+          const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
+          md = su.latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv);
+        }
+        const Vec3 d = su.map.to_world(md);
+        mx[k] = d.x;
+        my[k] = d.y;
+        mz[k] = d.z;
+        out.e[k] = e;
+      }
+    }
+  }
+  equal_area_sphere_to_square(m, mx.data(), my.data(), mz.data(), out.u.data(), out.v.data());
+}
+
+// Spreads a row's points with bilinear (tent) weights over the 2 x 2 table texels around each.
+void splat_accumulate(const Setup& su, const SplatRow& r, std::vector<double>& out) {
+  const int N = su.N;
+  for (std::size_t k = 0; k < r.e.size(); ++k) {
+    if (!(r.e[k] > 0)) continue;
+    const float px = r.u[k] * N - 0.5f, py = r.v[k] * N - 0.5f;
+    const float fx = std::floor(px), fy = std::floor(py);
+    const float tx = px - fx, ty = py - fy;
+    const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+    const double e = r.e[k];
+    if (x0 >= 0 && y0 >= 0 && x0 + 1 < N && y0 + 1 < N) {  // interior: no wrapping
+      out[su.fine.index(x0, y0)] += e * ((1 - tx) * (1 - ty));
+      out[su.fine.index(x0 + 1, y0)] += e * (tx * (1 - ty));
+      out[su.fine.index(x0, y0 + 1)] += e * ((1 - tx) * ty);
+      out[su.fine.index(x0 + 1, y0 + 1)] += e * (tx * ty);
+      continue;
+    }
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        int xi = x0 + i, yi = y0 + j;
+        if (!equal_area_wrap(N, xi, yi)) continue;
+        out[su.fine.index(xi, yi)] += e * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
+      }
+  }
+}
+
+// 2. Splat: every map texel's importance times its solid angle is spread over the table texels around
+// its centre. Energy-conserving where map texels are smaller than table texels (near a lat-long map's
+// poles), where point look-ups would miss a small bright texel or over-count it. A map texel taller or
+// wider than half a table texel is split into sub-texels first (each with its exact solid angle), so
+// the splat stays smooth. Rows are processed in chunks: parallel mapping, serial accumulation.
+std::vector<double> splat(const Setup& su) {
+  std::vector<double> out(su.total, 0.0);
+  // Azimuth sines and cosines of the map's column centres (lat-long, one split per column).
+  std::vector<float> col_cos(su.w), col_sin(su.w);
+  for (int x = 0; x < su.w; ++x) {
+    const double phi = 2.0 * kPi * (x + 0.5) / su.w;
+    col_cos[x] = static_cast<float>(std::cos(phi));
+    col_sin[x] = static_cast<float>(std::sin(phi));
+  }
+  const int chunk = std::max(1, std::min(su.h, (1 << 18) / su.w));
+  std::vector<SplatRow> rows(chunk);
+  for (int y0 = 0; y0 < su.h; y0 += chunk) {
+    const int y1 = std::min(su.h, y0 + chunk);
+    parallel_for(y0, y1, [&](int row_begin, int row_end) {
+      std::vector<float> mx, my, mz;
+      for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, rows[y - y0], mx, my, mz);
+    });
+    for (int y = y0; y < y1; ++y) splat_accumulate(su, rows[y - y0], out);
+  }
+  return out;
+}
+
+bool map_is_constant(const EnvironmentMap& map) {
+  float lo = std::numeric_limits<float>::max(), hi = 0;
+  for (int y = 0; y < map.height(); ++y)
+    for (int x = 0; x < map.width(); ++x) {
+      const float a = map.texel(x, y).average();
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
+    }
+  return hi - lo <= 1e-6f * hi;
+}
+
+// The floor (positive density everywhere) or the MIS compensation; returns the integral.
+double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr, float floor, bool compensated) {
+  const double n = double(func.size());
+  if (compensated) {
+    const float mean = static_cast<float>(sum / n);
+    double csum = 0;
+    for (float v : func) csum += std::max(0.0f, v - mean);
+    if (csum > 0) {
+      for (float& v : func) v = std::max(0.0f, v - mean);
+      return csum * texel_sr;
+    }
+  }
+  const float min_value = static_cast<float>(floor * sum / n);
+  if (min_value > 0) {
+    sum = 0;
+    for (float& v : func) {
+      v = std::max(v, min_value);
+      sum += v;
+    }
+  }
+  return sum * texel_sr;
+}
+
+}  // namespace
+
+double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options) {
+  const Setup su(map, fine);
+  std::vector<float> gathered;
+  std::vector<std::uint8_t> small;
+  gather(su, gathered, small);
+  const std::vector<double> splatted = splat(su);
+  // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
+  // (so a texel that sees light by either route keeps a positive density).
+  std::vector<float>& func = fine.values();
+  func.assign(su.total, 0.0f);
+  for (std::size_t i = 0; i < su.total; ++i) {
+    const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
+    const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
+    func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
+  }
+  // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
+  if (options.peak_ratio > 0) {
+    const std::vector<float> peaks = texel_peaks(map, su.lum, su.N);
+    const float inv_k = 1.0f / options.peak_ratio;
+    for (int y = 0; y < su.N; ++y)
+      for (int x = 0; x < su.N; ++x) {
+        float& v = func[fine.index(x, y)];
+        v = std::max(v, peaks[static_cast<std::size_t>(y) * su.N + x] * inv_k);
+      }
+  }
+  double sum = 0;
+  for (float v : func) sum += v;
+  if (!(sum > 0) || !std::isfinite(sum)) {
+    std::fill(func.begin(), func.end(), 0.0f);
+    return 0;
+  }
+  // A constant map's compensated table is the plain one.
+  const bool compensated = options.compensated && !map_is_constant(map);
+  return floor_or_compensate(func, sum, su.table_texel_sr, options.floor, compensated);
+}
+
+}  // namespace envpis::detail
