@@ -48,7 +48,10 @@ void bind_product_sampler(py::module_& m) {
                      "fraction of the environment-only distribution mixed in, [0, 1]")
       .def_readwrite("env_floor", &ProductSamplerOptions::env_floor,
                      "every cell the proxy sees keeps at least this times its environment share, [0, 1]")
-      .def_readwrite("simd", &ProductSamplerOptions::simd, "False: the scalar reference kernel");
+      .def_property(
+          "simd", [](const ProductSamplerOptions& o) { return std::string(envpis::to_string(o.simd)); },
+          [](ProductSamplerOptions& o, const std::string& name) { o.simd = envpis::parse_simd(name); },
+          "instruction set of the weights kernel: 'best' (default), 'scalar', 'sse2', 'avx2' or 'avx512'");
 
   py::class_<ProductSampler>(m, "ProductSampler",
                              "Product (environment x BSDF proxy) sampling at one shading point: prepare(), "

@@ -27,13 +27,15 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   float m = options_.env_mix;
   float* prob = top_.values();
   float sum = 0;
+  bool seen = false;
   if (prepared_.valid()) {
     kernels_->product_weights(detail::cell_arrays(*table_), detail::to_lobe_params(prepared_), prob);
     sum = top_.update();
+    seen = top_.valid();
   }
   // Nothing the proxy can see: environment only. A total below FLT_MIN (denormal lobe weights) counts
   // as nothing too: its reciprocal would overflow to inf and so would every pdf (found by fuzzing).
-  if (!top_.valid()) {
+  if (!seen) {
     fallback_ = true;
     m = 1.0f;
   }

@@ -309,6 +309,29 @@ TEST(ProductSampler, PrepareAndSampleDoNotAllocate) {
   EXPECT_GT(acc, 0);
 }
 
+// A shading point the proxy gives nothing (all-NaN weights) right after a valid one falls back to the
+// environment: the fallback must not see the previous point's distribution (the Python tests found
+// a sampler that kept it and returned pdf 0).
+TEST(ProductSampler, NanProxyAfterAValidPointFallsBackToTheEnvironment) {
+  const ImportanceTable table(test::synthetic_sky(128, 64));
+  ProductSampler ps(table);
+  BsdfProxy good;
+  good.add_reflection(1.0f, 0.2f);
+  ASSERT_TRUE(ps.prepare({0, 0, 1}, normalize({1, 0, 1}), good));
+  ASSERT_FALSE(ps.uses_environment_fallback());
+  const float nan = std::nanf("");
+  BsdfProxy bad;
+  bad.diffuse = bad.translucent = bad.reflection = bad.refraction = nan;
+  bad.alpha_reflection = bad.alpha_refraction = bad.ior = nan;
+  ASSERT_TRUE(ps.prepare({0, 0, 1}, normalize({1, 0, 1}), bad));
+  EXPECT_TRUE(ps.uses_environment_fallback());
+  for (const Point2 u : {Point2{0.2f, 0.7f}, Point2{0.5f, 0.5f}, Point2{0.9f, 0.1f}}) {
+    const DirectionSample s = ps.sample(u);
+    ASSERT_GT(s.pdf, 0.0f);
+    EXPECT_NEAR(s.pdf, table.pdf(s.direction), 1e-5f * s.pdf);
+  }
+}
+
 TEST(ProductSampler, DegenerateShadingPoints) {
   const ImportanceTable table(synthetic_sky());
   ProductSampler ps(table);
