@@ -267,7 +267,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                    table.top_resolution(), table.fine_resolution(), to.floor, to.compensated ? " compensated" : "",
                    table.empty() ? " EMPTY" : "", n.x, n.y, n.z, wo.x, wo.y, wo.z, proxy.diffuse, proxy.translucent,
                    proxy.reflection, proxy.refraction, proxy.alpha_reflection, proxy.alpha_refraction, proxy.ior,
-                   so.env_mix, so.simd ? 1 : 0, to_string(so.proxy.transform), so.proxy.min_alpha);
+                   so.env_mix, so.simd == Simd::Scalar ? 0 : 1, to_string(so.proxy.transform), so.proxy.min_alpha);
     ProductSampler sampler(table, so);
     // Two shading points with the same sampler: the scratch is reused between prepare() calls.
     const Vec3 normals[2] = {n, -n};
