@@ -130,6 +130,7 @@ TriangleMesh make_quad(Vec3 c, float hx, float hy) {
   TriangleMesh m;
   m.positions = {c + Vec3{-hx, -hy, 0}, c + Vec3{hx, -hy, 0}, c + Vec3{hx, hy, 0}, c + Vec3{-hx, hy, 0}};
   m.indices = {0, 1, 2, 0, 2, 3};
+  m.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};  // glTF convention: v = 0 at the +Y edge
   return m;
 }
 

@@ -73,7 +73,8 @@ Scene load_scene(const std::string& name_or_file, const std::string& env_path = 
 /// Procedural meshes (also usable from scene files as "type": "torus-knot").
 TriangleMesh make_torus_knot(int p = 2, int q = 3, float major = 2.0f, float minor = 0.8f, float tube = 0.45f,
                              int segments = 600, int sides = 32);
-TriangleMesh make_quad(Vec3 center, float half_x, float half_y);  ///< horizontal, normal +Z
+/// Horizontal, normal +Z, UVs spanning [0, 1]^2 (u along +X, v along -Y).
+TriangleMesh make_quad(Vec3 center, float half_x, float half_y);
 
 /// fig1's object ids, left to right, and their names.
 const std::vector<std::string>& fig1_sphere_names();
