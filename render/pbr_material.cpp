@@ -36,8 +36,8 @@ PbrMaterial::PbrMaterial(const PbrParams& p, PbrTextures textures) : params_(p),
   const Rgb metal_f0 = tinted_metal ? Rgb{1, 1, 1} : p.base_color;
   const bool textured_roughness = bool(textures_.metallic_roughness);
   const int n = textured_roughness ? kRoughnessLevels : 1;
-  // Only the lobes some shading point can use: a metallic texture can raise nothing above its factor.
-  const bool any_metal = p.metallic > 0, any_dielectric = p.metallic < 1;
+  // Only the lobes some shading point can use: a metallic texture scales the factor down, never up.
+  const bool any_metal = p.metallic > 0, any_dielectric = p.metallic < 1 || textured_roughness;
   for (int k = 0; k < n; ++k) {
     const float rough = textured_roughness ? float(k) / float(n - 1) : p.roughness;
     const float alpha = rough * rough;
