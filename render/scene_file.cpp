@@ -488,10 +488,13 @@ void add_gltf_object(Scene& s, const Fields& f, const fs::path& dir, const std::
   f.finish();
   if (override_material >= 0) {
     TriangleMesh all;
+    bool uvs = true;  // kept when every part has them (a textured replacement material needs them)
+    for (const GltfModel::Part& p : model.parts) uvs = uvs && !p.mesh.uvs.empty();
     for (GltfModel::Part& p : model.parts) {
       const std::uint32_t base = std::uint32_t(all.positions.size());
       all.positions.insert(all.positions.end(), p.mesh.positions.begin(), p.mesh.positions.end());
       all.normals.insert(all.normals.end(), p.mesh.normals.begin(), p.mesh.normals.end());
+      if (uvs) all.uvs.insert(all.uvs.end(), p.mesh.uvs.begin(), p.mesh.uvs.end());
       for (std::uint32_t i : p.mesh.indices) all.indices.push_back(base + i);
     }
     tr.apply(all);
