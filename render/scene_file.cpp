@@ -228,12 +228,12 @@ TextureRef parse_texture(const Fields& owner, const std::string& key, const fs::
   } catch (const Error& e) {
     owner.fail_at(owner.sub(key), e.what());
   }
-  if (roughness_only) {  // a grey roughness image as glTF's metallic-roughness: G = roughness, B = 1
+  if (roughness_only) {  // roughness from G (a grey image, or glTF's metallic-roughness layout), metallic 1
     const Texture& t = *r.texture;
     std::vector<float> px;
     px.reserve(std::size_t(t.width()) * t.height() * 4);
     for (int y = 0; y < t.height(); ++y)
-      for (int x = 0; x < t.width(); ++x) px.insert(px.end(), {0.0f, t.texel(x, y).r, 1.0f, 1.0f});
+      for (int x = 0; x < t.width(); ++x) px.insert(px.end(), {0.0f, t.texel(x, y).g, 1.0f, 1.0f});
     r.texture = std::make_shared<const Texture>(t.width(), t.height(), std::move(px));
   }
   return r;

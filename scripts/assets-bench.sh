@@ -31,12 +31,14 @@ fi
 [ -d "$ASSETS/hdri" ] || { echo "assets-bench: no $ASSETS/hdri: run scripts/fetch-assets.sh" >&2; exit 1; }
 start=$(date +%s)
 mkdir -p "$OUT"
+# A map's name in the output directories: the @pmndrs HDRIs share names with blender's (city, forest...).
+map_name() { case $1 in "$ASSETS"/hdri/*) echo "pmndrs-$(basename "$1" .exr)" ;; *) basename "$1" .exr ;; esac; }
 compare() {  # scene-file label map strategies [extra args]
   local scene=$1 label=$2 map=$3 strategies=$4
   shift 4
   "$BUILD/apps/envpis/envpis" compare --scene "$scene" --env "$map" --integrator path --max-depth "$MAX_DEPTH" \
     --strategies "$strategies" --seeds "$SEEDS" --spp "$SPP" --ref-spp "$REF_SPP" --width "$WIDTH" --height "$HEIGHT" \
-    --no-convergence --quiet --out "$OUT/$label--$(basename "$map" .exr)" "$@" 2>/dev/null | { grep -E "^overhead" || true; } | sed "s|^|  $label $(basename "$map" .exr): |"
+    --no-convergence --quiet --out "$OUT/$label--$(map_name "$map")" "$@" 2>/dev/null | { grep -E "^overhead" || true; } | sed "s|^|  $label $(map_name "$map"): |"
 }
 for scene in $SCENES; do
   name=$(basename "$scene" .json)

@@ -460,8 +460,8 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
     return o;
   };
   const int n = static_cast<int>(scene.objects().size());
-  const auto ref_mis = object_means(render(scene, options(Strategy::Mis, 1024, 1000)), n);
-  const auto ref_product = object_means(render(scene, options(Strategy::Product, 1024, 2000)), n);
+  const auto ref_mis = object_means(render(scene, options(Strategy::Mis, 512, 1000)), n);
+  const auto ref_product = object_means(render(scene, options(Strategy::Product, 512, 2000)), n);
   std::vector<int> objects;  // objects with enough pixels for a trustworthy variance
   for (int i = 0; i < n; ++i)
     if (ref_mis[i].pixels >= 12) objects.push_back(i);
