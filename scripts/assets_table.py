@@ -111,7 +111,7 @@ def main(out):
         worse_total += d["worse"]
         worse_noise_total += d["worse_noise"]
         object_maps += d["n"]
-        print(f"| {scene} | {obj} | {f(a, 3) if a is not None else 'mixed'} | {d['n']} | {f(geomean(d['mis']))} ({f(min(d['mis']))}) | "
+        print(f"| {scene} | {obj} | {f(a, 3) if a is not None else 'mixed or textured'} | {d['n']} | {f(geomean(d['mis']))} ({f(min(d['mis']))}) | "
               f"{f(geomean(d['comp']))} ({f(min(d['comp']))}) | {f(geomean(d['eff_mis']))} | {f(geomean(d['eff_comp']))} | {d['worse']} ({d['worse_noise']}) |")
     pooled = geomean(glossy_eff_comp)
     ov = median(overheads)
