@@ -224,9 +224,11 @@ Vec3 y_up_to_z_up(aiVector3D v) { return {v.x, -v.z, v.y}; }
 
 }  // namespace
 
-GltfModel load_gltf(const std::string& path) {
+namespace {
+
+GltfModel read_gltf(const std::string& path) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw Error("glTF file '" + path + "' does not exist");
+  if (!fs::is_regular_file(path, ec)) fail(path, "no such glTF file");
   Document doc(path);
   Assimp::Importer importer;
   const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
@@ -320,12 +322,12 @@ GltfModel load_gltf(const std::string& path) {
         const json cams = doc.j.value("cameras", json::array());
         float aspect = cam->mAspect > 0 ? cam->mAspect : 16.0f / 9.0f;
         if (c < cams.size() && cams[c].value("type", "") == "perspective") {
-          const json& p = cams[c]["perspective"];
+          const json p = cams[c].value("perspective", json::object());
           spec.vfov_degrees = number(p, "yfov", 0.7f) * 180.0f / kPi;
           aspect = number(p, "aspectRatio", aspect);
         } else if (c < cams.size() && cams[c].value("type", "") == "orthographic") {
           spec.projection = Projection::Orthographic;
-          spec.ortho_height = 2 * number(cams[c]["orthographic"], "ymag", 1.0f);
+          spec.ortho_height = 2 * number(cams[c].value("orthographic", json::object()), "ymag", 1.0f);
         }
         spec.width = 640;
         spec.height = std::max(1, int(std::lround(640 / std::clamp(aspect, 0.1f, 10.0f))));
@@ -342,6 +344,20 @@ GltfModel load_gltf(const std::string& path) {
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) fail(path, "a non-finite texture coordinate");
   }
   return model;
+}
+
+}  // namespace
+
+GltfModel load_gltf(const std::string& path) {
+  // Every problem as one Error that names the file (JSON type errors included).
+  try {
+    return read_gltf(path);
+  } catch (const json::exception& e) {
+    fail(path, std::string("invalid glTF: ") + e.what());
+  } catch (const Error& e) {
+    if (std::string(e.what()).rfind(path, 0) == 0) throw;
+    fail(path, e.what());
+  }
 }
 
 }  // namespace envpis::render
