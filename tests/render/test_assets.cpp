@@ -33,7 +33,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
+#ifdef ENVPIS_SOURCE_DIR
+const fs::path kRepo = ENVPIS_SOURCE_DIR;
+#else
 const fs::path kRepo = fs::path(ENVPIS_TEST_DATA).parent_path().parent_path();  // tests/data -> repo
+#endif
 const std::string kModels = "/usr/share/assimp/models/glTF2";
 
 std::vector<fs::path> asset_scenes() {
