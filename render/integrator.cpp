@@ -46,6 +46,26 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     const float u_rr = rng.next1d();
 
     const SceneMaterial& mat = scene_.material(hit.material);
+    const Material* bsdf_ptr = &mat.bsdf;
+    float cos_bent = 1;
+    if (mat.textured()) {
+      // One material per thread, refilled at every textured shading point (no allocation once grown).
+      thread_local Material textured;
+      mat.pbr->assemble(hit.uv, &textured);
+      textured.set_closed_surface(mat.bsdf.closed_surface());
+      bsdf_ptr = &textured;
+      L += beta * mat.pbr->emission(hit.uv);
+      if (mat.pbr->has_normal_map()) {
+        const Vec3 n = mat.pbr->normal_mapped(hit.uv, hit.ns, hit.dpdu, hit.bitangent_sign);
+        if (dot(n, hit.ng) > 0) {
+          hit.ns = n;
+          if (scene_.widen_bent_normals()) cos_bent = dot(n, hit.ng);
+        }
+      }
+    } else if (!is_black(mat.emission)) {
+      L += beta * mat.emission;
+    }
+    const Material& bsdf = *bsdf_ptr;
     Vec3 ng = hit.ng, ns = hit.ns;
     if (!mat.transmissive && dot(wo, ng) < 0) {  // opaque materials are two-sided
       ng = -ng;
@@ -62,7 +82,8 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       sc.wo = wo;
       sc.wo_local = wo_l;
       sc.frame = &frame;
-      sc.bsdf = &mat.bsdf;
+      sc.bsdf = &bsdf;
+      sc.cos_bent = cos_bent;
       sc.jitter = rng.stream(static_cast<unsigned>(depth));
       sc.opaque = !mat.transmissive;
       light.prepare(sc);
@@ -72,15 +93,15 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
         const Vec3 wi_l = frame.to_local(wi);
         const bool above = dot(wi, ng) > 0;
         if ((mat.transmissive || above) && sides_agree(wi, ng, wi_l.z)) {
-          const Rgb f = mat.bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
+          const Rgb f = bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
           if (!is_black(f)) {
             const Rgb Le = env_.eval(wi);
             if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
-              const float w = light.uses_mis() ? mis_weight(ls.pdf, mat.bsdf.pdf(wo_l, wi_l)) : 1.0f;
+              const float w = light.uses_mis() ? mis_weight(ls.pdf, bsdf.pdf(wo_l, wi_l)) : 1.0f;
               const Rgb c = beta * f * Le * (w / ls.pdf);
               L += c;
               if (log && log->exceeds(c.average()))
-                log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, mat.bsdf.pdf(wo_l, wi_l), w},
+                log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, bsdf.pdf(wo_l, wi_l), w},
                             light);
             }
           }
@@ -89,7 +110,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     }
 
     // 2. BSDF sample: adds the environment if it escapes, otherwise continues the path.
-    const std::optional<BsdfSample> bs = mat.bsdf.sample(wo_l, u_bsdf, u_lobe);
+    const std::optional<BsdfSample> bs = bsdf.sample(wo_l, u_bsdf, u_lobe);
     if (!bs || !(bs->pdf > 0) || !is_finite(bs->weight) || is_black(bs->weight)) break;
     const Vec3 wi = frame.to_world(bs->wi);
     if (!is_valid_direction(wi)) break;

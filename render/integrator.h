@@ -1,4 +1,5 @@
-// The integrators: environment lighting only (the scene has no emitting surface).
+// The integrators: environment lighting, plus the emission of emissive (glTF) materials, added where a
+// path hits them (they are not light-sampled).
 //
 //   direct  one bounce: the camera ray's first hit gathers environment light with the strategy's
 //           light sample and one BSDF sample (combined by MIS for mis, mis-comp, product, oracle),
@@ -10,6 +11,11 @@
 // sample; the BSDF sample's direction, if it reaches the environment, adds its radiance with weight
 // w_b (0 for `env`, 1 for `bsdf`), and otherwise continues the path. `direct` is `path` with
 // max_depth 1 and no Russian roulette.
+//
+// Textured materials (SceneMaterial::textured) are assembled per shading point into a per-thread
+// Material (render/pbr_material.h); a normal map replaces the shading normal (kept on the geometric
+// normal's side) and, with Scene::widen_bent_normals, the product strategy's proxy is widened by the
+// angle between the two (ShadingContext::cos_bent).
 //
 // Light samples that arrive below the surface (of an opaque material), that have pdf 0, or whose
 // geometric and shading sides disagree contribute nothing.

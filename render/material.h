@@ -51,9 +51,14 @@ class Lobe {
 
 /// A material: sum of weighted lobes. eval sums the lobes; sample picks a lobe with probability
 /// proportional to weight * albedo(wo) and returns the mixture pdf (one-sample MIS over lobes).
+/// A weight may be a colour (a texture's tint of a lobe shared by many shading points); the lobe
+/// choice and the proxy then use its channel average.
 class Material {
  public:
   void add(std::shared_ptr<const Lobe> lobe, float weight = 1.0f);
+  void add(std::shared_ptr<const Lobe> lobe, Rgb weight);
+  /// Removes every lobe, keeping the storage (a per-thread material rebuilt at each shading point).
+  void clear_lobes() { lobes_.clear(); }
   Rgb eval(Vec3 wo, Vec3 wi) const;
   float pdf(Vec3 wo, Vec3 wi) const;
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const;
@@ -84,7 +89,8 @@ class Material {
  private:
   struct Entry {
     std::shared_ptr<const Lobe> lobe;
-    float weight;
+    Rgb weight;
+    float weight_average;  ///< for the lobe choice and the proxy
   };
   std::vector<Entry> lobes_;
   std::string name_;

@@ -83,18 +83,51 @@ bool mesh_is_closed_outward(const TriangleMesh& m, const std::vector<Vec3>& fn) 
 
 }  // namespace
 
+/// Per triangle: dp/du from the UV parametrization (the tangent of a normal map's frame) and the
+/// bitangent's handedness. glTF's v grows downwards in the image, so for an unmirrored mapping
+/// cross(dp/du, dp/dv) points against the normal and the +Y (up) of a normal map is -dp/dv, which
+/// is cross(n, dp/du): sign +1. Degenerate UVs give a tangent perpendicular to the normal.
+std::vector<Scene::FaceTangent> Scene::face_tangents(const TriangleMesh& m, const std::vector<Vec3>& fn) {
+  std::vector<FaceTangent> out(fn.size());
+  for (std::size_t t = 0; t < fn.size(); ++t) {
+    const std::uint32_t* id = &m.indices[3 * t];
+    const Vec3 e1 = m.positions[id[1]] - m.positions[id[0]], e2 = m.positions[id[2]] - m.positions[id[0]];
+    const float du1 = m.uvs[id[1]].x - m.uvs[id[0]].x, dv1 = m.uvs[id[1]].y - m.uvs[id[0]].y;
+    const float du2 = m.uvs[id[2]].x - m.uvs[id[0]].x, dv2 = m.uvs[id[2]].y - m.uvs[id[0]].y;
+    const float det = du1 * dv2 - du2 * dv1;
+    FaceTangent ft{Frame(fn[t]).s, 1.0f};
+    if (std::fabs(det) > 1e-20f && std::isfinite(det)) {
+      const Vec3 dpdu = (e1 * dv2 - e2 * dv1) * (1.0f / det), dpdv = (e2 * du1 - e1 * du2) * (1.0f / det);
+      if (is_valid_direction(dpdu)) {
+        ft.dpdu = dpdu;
+        ft.sign = dot(cross(dpdu, dpdv), fn[t]) <= 0 ? 1.0f : -1.0f;
+      }
+    }
+    out[t] = ft;
+  }
+  return out;
+}
+
 Scene::Scene() = default;
 Scene::~Scene() = default;
 Scene::Scene(Scene&&) noexcept = default;
 Scene& Scene::operator=(Scene&&) noexcept = default;
 
 int Scene::add_material(std::string name, Material bsdf, bool transmissive) {
+  SceneMaterial m;
+  m.name = std::move(name);
+  m.bsdf = std::move(bsdf);
+  m.transmissive = transmissive;
+  return add_material(std::move(m));
+}
+
+int Scene::add_material(SceneMaterial m) {
   if (committed_) throw Error("scene: cannot add a material after commit()");
-  if (name.empty()) throw Error("scene: a material needs a name");
-  if (find_material(name) >= 0) throw Error("scene: duplicate material name '" + name + "'");
-  if (bsdf.empty()) throw Error("scene: material '" + name + "' has no lobe");
-  bsdf.set_name(name);
-  materials_.push_back({std::move(name), std::move(bsdf), transmissive});
+  if (m.name.empty()) throw Error("scene: a material needs a name");
+  if (find_material(m.name) >= 0) throw Error("scene: duplicate material name '" + m.name + "'");
+  if (m.bsdf.empty() && !m.textured()) throw Error("scene: material '" + m.name + "' has no lobe");
+  m.bsdf.set_name(m.name);
+  materials_.push_back(std::move(m));
   return static_cast<int>(materials_.size()) - 1;
 }
 
@@ -121,6 +154,7 @@ int Scene::add_sphere(std::string name, Vec3 center, float radius, int material)
   objects_.push_back(std::move(o));
   meshes_.emplace_back();
   face_normals_.emplace_back();
+  face_tangents_.emplace_back();
   return static_cast<int>(objects_.size()) - 1;
 }
 
@@ -136,6 +170,11 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
   for (const Vec3& p : mesh.positions)
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       throw Error("scene: mesh '" + name + "' has a non-finite vertex");
+  if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+    throw Error("scene: mesh '" + name + "' has " + std::to_string(mesh.uvs.size()) + " UVs for " +
+                std::to_string(mesh.positions.size()) + " vertices");
+  for (const Point2& uv : mesh.uvs)
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) throw Error("scene: mesh '" + name + "' has a non-finite UV");
   for (std::uint32_t i : mesh.indices)
     if (i >= mesh.positions.size()) throw Error("scene: mesh '" + name + "' has an out-of-range vertex index");
   for (Vec3& n : mesh.normals) n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 0};
@@ -153,6 +192,8 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
     }
     fn[t] = n;
   }
+  std::vector<FaceTangent> tangents;
+  if (!mesh.uvs.empty()) tangents = face_tangents(mesh, fn);
   ObjectInfo o;
   o.name = std::move(name);
   o.type = ObjectType::Mesh;
@@ -162,6 +203,7 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
   objects_.push_back(std::move(o));
   meshes_.push_back(std::move(mesh));
   face_normals_.push_back(std::move(fn));
+  face_tangents_.push_back(std::move(tangents));
   return static_cast<int>(objects_.size()) - 1;
 }
 
@@ -257,6 +299,9 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   const int id = static_cast<int>(rh.hit.geomID);
   const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
   hit->t = rh.ray.tfar;
+  hit->uv = {0, 0};
+  hit->dpdu = {0, 0, 0};
+  hit->bitangent_sign = 1;
   hit->object = id;
   hit->material = o.material;
   if (o.type == ObjectType::Sphere) {
@@ -274,6 +319,13 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
     const Vec3 ng = face_normals_[static_cast<std::size_t>(id)][rh.hit.primID];
     hit->ng = ng;
     hit->ns = ng;
+    if (!m.uvs.empty()) {
+      hit->uv = {m.uvs[tri[0]].x * w + m.uvs[tri[1]].x * u + m.uvs[tri[2]].x * v,
+                 m.uvs[tri[0]].y * w + m.uvs[tri[1]].y * u + m.uvs[tri[2]].y * v};
+      const FaceTangent& ft = face_tangents_[static_cast<std::size_t>(id)][rh.hit.primID];
+      hit->dpdu = ft.dpdu;
+      hit->bitangent_sign = ft.sign;
+    }
     if (!m.normals.empty()) {
       const Vec3 ns = m.normals[tri[0]] * w + m.normals[tri[1]] * u + m.normals[tri[2]] * v;
       if (is_valid_direction(ns)) {

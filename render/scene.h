@@ -26,6 +26,7 @@
 #include "render/camera.h"
 #include "render/material.h"
 #include "render/math.h"
+#include "render/pbr_material.h"
 
 namespace envpis::render {
 
@@ -37,12 +38,19 @@ struct SceneMaterial {
   /// keeps the outward normal and wo may be below it). Opaque materials are two-sided: their frame
   /// is flipped towards the viewer.
   bool transmissive = false;
+  /// A glTF metallic-roughness material (render/pbr_material.h). When it is textured, the integrator
+  /// assembles the BSDF per shading point from it, and `bsdf` holds its untextured factors (used
+  /// for the name and the closed-surface flag only); otherwise `bsdf` is the material.
+  std::shared_ptr<const PbrMaterial> pbr;
+  Rgb emission{0, 0, 0};  ///< emitted radiance when there is no textured pbr material
+  bool textured() const { return pbr && pbr->textured(); }
 };
 
 struct TriangleMesh {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;           ///< per vertex (same count as positions) or empty (flat shading)
   std::vector<std::uint32_t> indices;  ///< three per triangle
+  std::vector<Point2> uvs;             ///< per vertex (glTF convention, render/texture.h) or empty
 };
 
 enum class ObjectType { Sphere, Mesh };
@@ -64,6 +72,9 @@ struct SurfaceHit {
   Vec3 ns;      ///< unit shading normal, on the same side as ng
   int object = -1;
   int material = -1;
+  Point2 uv{0, 0};            ///< texture coordinates (meshes with UVs; else 0)
+  Vec3 dpdu{0, 0, 0};         ///< the triangle's tangent along +u (meshes with UVs; else 0)
+  float bitangent_sign = 1;   ///< +1: bitangent = cross(ns, tangent) (glTF's right-handed frame)
 };
 
 class Scene {
@@ -77,6 +88,8 @@ class Scene {
 
   /// Returns the material id. Names must be unique and the material non-empty (throws Error).
   int add_material(std::string name, Material bsdf, bool transmissive);
+  /// The same for a full SceneMaterial (pbr, emission); its name must be set.
+  int add_material(SceneMaterial material);
   /// Material id by name, or -1.
   int find_material(const std::string& name) const;
   const SceneMaterial& material(int id) const { return materials_[static_cast<std::size_t>(id)]; }
@@ -101,6 +114,11 @@ class Scene {
   /// (default true; see above). Before commit(), commit() applies it; after, the flags are updated
   /// at once (they do not touch the acceleration structure). Not while rendering.
   void set_proxy_closed_surfaces(bool enable);
+  /// Whether the product strategy widens its proxy's roughness where a normal map bends the shading
+  /// normal away from the geometric one (envpis::widen_roughness; default true; docs/assets.md
+  /// measures it).
+  void set_widen_bent_normals(bool enable) { widen_bent_normals_ = enable; }
+  bool widen_bent_normals() const { return widen_bent_normals_; }
   bool proxy_closed_surfaces() const { return proxy_closed_surfaces_; }
 
   /// Builds the Embree acceleration structure and sets each material's closed-surface flag. Throws
@@ -120,11 +138,18 @@ class Scene {
   std::vector<ObjectInfo> objects_;
   std::vector<TriangleMesh> meshes_;  // indexed like objects_ (empty for spheres)
   std::vector<std::vector<Vec3>> face_normals_;
+  struct FaceTangent {
+    Vec3 dpdu;
+    float sign;
+  };
+  std::vector<std::vector<FaceTangent>> face_tangents_;  // meshes with UVs only
   CameraSpec camera_;
   std::shared_ptr<const EnvironmentMap> env_;
   std::string env_description_;
   bool proxy_closed_surfaces_ = true;
+  bool widen_bent_normals_ = true;
   void update_closed_surface_flags();
+  static std::vector<FaceTangent> face_tangents(const TriangleMesh& m, const std::vector<Vec3>& fn);
   bool committed_ = false;
 };
 

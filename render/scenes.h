@@ -49,17 +49,32 @@ bool is_builtin_scene(const std::string& name);
 /// Builds a built-in scene; env null = the scene's default environment. The scene is committed.
 Scene make_builtin_scene(const std::string& name, std::shared_ptr<const EnvironmentMap> env = nullptr);
 
-/// Loads a JSON scene file; env non-null overrides the file's environment. The scene is committed.
+/// Loads a JSON scene file (or a glTF file, by its extension .gltf / .glb: load_gltf_scene); env
+/// non-null overrides the file's environment. The scene is committed.
 /// Throws Error naming the file and the offending field for every problem.
 Scene load_scene_file(const std::string& path, std::shared_ptr<const EnvironmentMap> env = nullptr);
 
-/// A built-in name or a scene file path; env_path non-empty loads that map (overriding the scene's).
+/// A glTF file (.gltf, .glb; render/gltf.h) as a whole scene: its materials, its first camera (or
+/// one that frames the model from the front, slightly above), the default environment unless env.
+Scene load_gltf_scene(const std::string& path, std::shared_ptr<const EnvironmentMap> env = nullptr);
+
+/// The directories scene files name as ${NAME} (docs/assets.md):
+///   ASSIMP_MODELS   $ENVPIS_ASSIMP_MODELS, else /usr/share/assimp/models (Debian assimp-testmodels)
+///   ENVPIS_ASSETS   $ENVPIS_ASSETS, else ${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets (what
+///                   scripts/fetch-assets.sh decodes from npm's @pmndrs/assets)
+///   BLENDER_WORLDS  kBlenderWorldDir
+/// Throws Error for another name.
+std::string asset_directory(const std::string& name);
+
+/// A built-in name, a scene file (.json) or a glTF file (.gltf, .glb) path; env_path non-empty
+/// loads that map (overriding the scene's).
 Scene load_scene(const std::string& name_or_file, const std::string& env_path = "");
 
 /// Procedural meshes (also usable from scene files as "type": "torus-knot").
 TriangleMesh make_torus_knot(int p = 2, int q = 3, float major = 2.0f, float minor = 0.8f, float tube = 0.45f,
                              int segments = 600, int sides = 32);
-TriangleMesh make_quad(Vec3 center, float half_x, float half_y);  ///< horizontal, normal +Z
+/// Horizontal, normal +Z, UVs spanning [0, 1]^2 (u along +X, v along -Y).
+TriangleMesh make_quad(Vec3 center, float half_x, float half_y);
 
 /// fig1's object ids, left to right, and their names.
 const std::vector<std::string>& fig1_sphere_names();

@@ -100,6 +100,10 @@ void LightSampler::prepare(const ShadingContext& sc) {
     if (!product_) return;
     BsdfProxy proxy;
     sc.bsdf->fill_proxy(proxy, sc.wo_local);
+    if (sc.cos_bent < 1) {
+      proxy.alpha_reflection = widen_roughness(proxy.alpha_reflection, sc.cos_bent);
+      proxy.alpha_refraction = widen_roughness(proxy.alpha_refraction, sc.cos_bent);
+    }
     product_->prepare(sc.n, sc.wo, proxy);
     return;
   }

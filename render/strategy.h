@@ -73,6 +73,10 @@ struct ShadingContext {
   /// True when the material reflects only (f = 0 below the surface): the oracle then skips the cells
   /// whose cone lies entirely below the surface.
   bool opaque = false;
+  /// Cosine between a normal-mapped shading normal and the geometric normal; below 1 the product
+  /// strategy widens its proxy's roughness by that angle (envpis::widen_roughness): its proxy lobes
+  /// are built about the bent normal, which the geometry's horizon does not follow. 1: not bent.
+  float cos_bent = 1;
 };
 
 /// Per-thread light sampling for one strategy. Not thread-safe; create one per thread.

@@ -14,6 +14,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # real HDR environment maps (CC0): /usr/share/blender/datafiles/studiolights/world/*.exr
   blender-data
+  # glTF 2.0 models of the asset scenes and broken glTF files for the tests (docs/assets.md)
+  assimp-testmodels
   # report plots and the browser test
   python3 python3-matplotlib python3-numpy chromium
   # the Python module (python/) and its tests
@@ -38,10 +40,12 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#PACKAGES[@]} packages already installed"
-  exit 0
+else
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+# The asset scenes' models and HDRIs from npm (@pmndrs/assets), decoded into a cache outside the tree.
+"$(dirname "$0")/fetch-assets.sh"

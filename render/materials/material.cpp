@@ -24,7 +24,7 @@ class Selection {
     if (n_ > kInline) heap_.resize(n_);
     float* p = data();
     for (std::size_t k = 0; k < n_; ++k) {
-      const float a = lobes[k].weight * lobes[k].lobe->albedo(wo);
+      const float a = lobes[k].weight_average * lobes[k].lobe->albedo(wo);
       p[k] = std::isfinite(a) && a > 0 ? a : 0.0f;
       total_ += p[k];
     }
@@ -62,9 +62,12 @@ class Selection {
 
 }  // namespace
 
-void Material::add(std::shared_ptr<const Lobe> lobe, float weight) {
-  if (!lobe || !std::isfinite(weight) || !(weight > 0)) return;  // contributes nothing
-  lobes_.push_back({std::move(lobe), weight});
+void Material::add(std::shared_ptr<const Lobe> lobe, float weight) { add(std::move(lobe), Rgb{weight, weight, weight}); }
+
+void Material::add(std::shared_ptr<const Lobe> lobe, Rgb weight) {
+  const float avg = weight.average();
+  if (!lobe || !std::isfinite(avg) || !(avg > 0)) return;  // contributes nothing
+  lobes_.push_back({std::move(lobe), lobe::sanitize_color(weight), avg});
 }
 
 Rgb Material::eval(Vec3 wo, Vec3 wi) const {
@@ -111,20 +114,20 @@ std::optional<BsdfSample> Material::sample(Vec3 wo, Point2 u, float uc) const {
 float Material::albedo(Vec3 wo) const {
   if (!microfacet::usable(wo)) return 0.0f;
   float a = 0;
-  for (const Entry& e : lobes_) a += e.weight * e.lobe->albedo(wo);
+  for (const Entry& e : lobes_) a += e.weight_average * e.lobe->albedo(wo);
   return a;
 }
 
 void Material::fill_proxy(BsdfProxy& proxy, Vec3 wo) const {
   if (!microfacet::usable(wo)) return;
   if (!closed_surface_) {
-    for (const Entry& e : lobes_) e.lobe->add_to_proxy(proxy, wo, e.weight);
+    for (const Entry& e : lobes_) e.lobe->add_to_proxy(proxy, wo, e.weight_average);
     return;
   }
   // Closed surface: keep only the lobes on the outside, where a light sample can reach the
   // environment. Seen from outside these are the ones on wo's side, seen from inside the ones across.
   BsdfProxy all;
-  for (const Entry& e : lobes_) e.lobe->add_to_proxy(all, wo, e.weight);
+  for (const Entry& e : lobes_) e.lobe->add_to_proxy(all, wo, e.weight_average);
   if (wo.z > 0) {
     proxy.add_diffuse(all.diffuse);
     proxy.add_reflection(all.reflection, all.alpha_reflection);

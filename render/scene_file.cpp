@@ -1,3 +1,4 @@
+// JSON scene files (docs/scene-format.md) and load_scene of render/scenes.h.
 #include "render/scenes.h"
 
 #include <assimp/Importer.hpp>
@@ -7,238 +8,19 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+
+#include "render/gltf.h"
 
 namespace envpis::render {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-// ---------------------------------------------------------------------------------------------
-// Environments
-
-EnvironmentMap make_procedural_sky(const SkyOptions& o) {
-  if (o.width < 4 || o.height < 2 || o.width > 16384 || o.height > 8192) throw Error("sky: invalid resolution");
-  if (!(o.sun_radius > 0 && o.sun_radius < 90)) throw Error("sky: sun radius must be in (0, 90) degrees");
-  if (!(o.sun_radiance >= 0) || !(o.sky_radiance >= 0) || !(o.ground_radiance >= 0))
-    throw Error("sky: radiances must be >= 0");
-  const float el = o.sun_elevation * kPi / 180.0f, az = o.sun_azimuth * kPi / 180.0f;
-  const Vec3 sun{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
-  const float cos_r = std::cos(o.sun_radius * kPi / 180.0f);
-  const float cos_soft = std::cos(0.85f * o.sun_radius * kPi / 180.0f);
-  const Rgb zenith{0.18f, 0.32f, 0.70f}, horizon{0.95f, 0.90f, 0.85f}, sun_color{1.0f, 0.92f, 0.80f};
-  auto radiance = [&](Vec3 d) -> Rgb {
-    Rgb c;
-    if (d.z >= 0) {
-      const float h = std::pow(1.0f - d.z, 3.0f);
-      c = (zenith * (1.0f - h) + horizon * h) * o.sky_radiance;
-    } else {
-      c = Rgb{1.0f, 0.95f, 0.9f} * o.ground_radiance;
-    }
-    const float cs = dot(d, sun);
-    if (cs > cos_r) {
-      const float edge = cs >= cos_soft ? 1.0f : (cs - cos_r) / (cos_soft - cos_r);  // soft limb
-      c = c + sun_color * (o.sun_radiance * edge);
-    }
-    return c;
-  };
-  constexpr int S = 4;  // supersampling per texel
-  std::vector<float> px(static_cast<std::size_t>(o.width) * o.height * 3);
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) {
-      Rgb acc;
-      for (int sy = 0; sy < S; ++sy)
-        for (int sx = 0; sx < S; ++sx) {
-          const Point2 uv{(x + (sx + 0.5f) / S) / o.width, (y + (sy + 0.5f) / S) / o.height};
-          acc = acc + radiance(latlong_to_direction(uv));
-        }
-      float* p = &px[(static_cast<std::size_t>(y) * o.width + x) * 3];
-      p[0] = acc.r / (S * S);
-      p[1] = acc.g / (S * S);
-      p[2] = acc.b / (S * S);
-    }
-  EnvironmentMapOptions mo;
-  mo.layout = MapLayout::LatLong;
-  // The texels were computed at latlong_to_direction(uv), the map-space direction, which is the world
-  // direction exactly for a Legacy map without rotation.
-  mo.orientation = LatLongOrientation::Legacy;
-  return EnvironmentMap::from_pixels(o.width, o.height, std::move(px), mo);
-}
-
-EnvironmentMap make_constant_environment(Rgb radiance, int width, int height) {
-  std::vector<float> px(static_cast<std::size_t>(width) * height * 3);
-  for (std::size_t i = 0; i < px.size(); i += 3) {
-    px[i] = radiance.r;
-    px[i + 1] = radiance.g;
-    px[i + 2] = radiance.b;
-  }
-  EnvironmentMapOptions mo;
-  mo.layout = MapLayout::LatLong;
-  return EnvironmentMap::from_pixels(width, height, std::move(px), mo);
-}
-
-std::shared_ptr<const EnvironmentMap> default_environment(std::string* description) {
-  const std::string sunset = std::string(kBlenderWorldDir) + "/sunset.exr";
-  std::error_code ec;
-  if (fs::exists(sunset, ec)) {
-    if (description) *description = sunset;
-    return std::make_shared<const EnvironmentMap>(EnvironmentMap::load(sunset));
-  }
-  if (description) *description = "procedural sky (no " + sunset + ")";
-  return std::make_shared<const EnvironmentMap>(make_procedural_sky());
-}
-
-// ---------------------------------------------------------------------------------------------
-// Procedural meshes
-
-TriangleMesh make_torus_knot(int p, int q, float major, float minor, float tube, int segments, int sides) {
-  if (segments < 3 || sides < 3) throw Error("torus knot: needs at least 3 segments and 3 sides");
-  TriangleMesh m;
-  m.positions.reserve(static_cast<std::size_t>(segments) * sides);
-  m.normals.reserve(m.positions.capacity());
-  const float fp = float(p), fq = float(q);
-  for (int i = 0; i < segments; ++i) {
-    const float t = 2.0f * kPi * float(i) / float(segments);
-    const float cq = std::cos(fq * t), sq = std::sin(fq * t), cp = std::cos(fp * t), sp = std::sin(fp * t);
-    const float r = major + minor * cq, r1 = -minor * fq * sq, r2 = -minor * fq * fq * cq;
-    const Vec3 c{r * cp, r * sp, minor * sq};
-    const Vec3 d1{r1 * cp - fp * r * sp, r1 * sp + fp * r * cp, minor * fq * cq};
-    const Vec3 d2{r2 * cp - 2 * fp * r1 * sp - fp * fp * r * cp, r2 * sp + 2 * fp * r1 * cp - fp * fp * r * sp,
-                  -minor * fq * fq * sq};
-    const Vec3 T = normalize(d1);
-    const Vec3 B = normalize(cross(d1, d2));  // Frenet frame: periodic, so the tube closes exactly
-    const Vec3 N = cross(B, T);
-    for (int j = 0; j < sides; ++j) {
-      const float a = 2.0f * kPi * float(j) / float(sides);
-      const Vec3 n = N * std::cos(a) + B * std::sin(a);
-      m.positions.push_back(c + n * tube);
-      m.normals.push_back(n);
-    }
-  }
-  for (int i = 0; i < segments; ++i)
-    for (int j = 0; j < sides; ++j) {
-      const std::uint32_t i1 = (i + 1) % segments, j1 = (j + 1) % sides;
-      const std::uint32_t a = i * sides + j, b = i1 * sides + j, c = i1 * sides + j1, d = i * sides + j1;
-      // counter-clockwise seen from outside (cross(T, n) ordering)
-      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
-    }
-  // Make the winding agree with the outward normals.
-  const std::uint32_t* t0 = m.indices.data();
-  const Vec3 fn = cross(m.positions[t0[1]] - m.positions[t0[0]], m.positions[t0[2]] - m.positions[t0[0]]);
-  if (dot(fn, m.normals[t0[0]]) < 0)
-    for (std::size_t k = 0; k < m.indices.size(); k += 3) std::swap(m.indices[k + 1], m.indices[k + 2]);
-  return m;
-}
-
-TriangleMesh make_quad(Vec3 c, float hx, float hy) {
-  TriangleMesh m;
-  m.positions = {c + Vec3{-hx, -hy, 0}, c + Vec3{hx, -hy, 0}, c + Vec3{hx, hy, 0}, c + Vec3{-hx, hy, 0}};
-  m.indices = {0, 1, 2, 0, 2, 3};
-  return m;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Built-in scenes
-
-const std::vector<std::string>& builtin_scene_names() {
-  static const std::vector<std::string> names{"fig1", "fig5"};
-  return names;
-}
-
-bool is_builtin_scene(const std::string& name) {
-  const auto& n = builtin_scene_names();
-  return std::find(n.begin(), n.end(), name) != n.end();
-}
-
-const std::vector<std::string>& fig1_sphere_names() {
-  static const std::vector<std::string> names{"conductor-0.02", "conductor-0.05", "conductor-0.1",
-                                              "conductor-0.2",  "conductor-0.3",  "conductor-0.5",
-                                              "diffuse",        "glass"};
-  return names;
-}
-
-namespace {
-
-Material single(std::shared_ptr<const Lobe> lobe) {
-  Material m;
-  m.add(std::move(lobe), 1.0f);
-  return m;
-}
-
-Scene build_fig1(std::shared_ptr<const EnvironmentMap> env, std::string env_desc) {
-  Scene s;
-  const float roughness[6] = {0.02f, 0.05f, 0.1f, 0.2f, 0.3f, 0.5f};
-  const Rgb metal{0.9f, 0.9f, 0.9f};
-  const auto& names = fig1_sphere_names();
-  for (int i = 0; i < 6; ++i)
-    s.add_material(names[i], single(make_conductor_reflectance(roughness[i], metal)), false);
-  s.add_material("diffuse", single(make_lambert({0.8f, 0.8f, 0.8f})), false);
-  s.add_material("glass", single(make_dielectric(0.2f, 1.5f)), true);
-  const float spacing = 2.3f;
-  for (int i = 0; i < 8; ++i) s.add_sphere(names[i], {(float(i) - 3.5f) * spacing, 0.0f, 0.0f}, 1.0f, i);
-  CameraSpec cam;
-  cam.from = {0, -40, 0};
-  cam.to = {0, 0, 0};
-  cam.up = {0, 0, 1};
-  cam.vfov_degrees = 4.8f;
-  cam.width = 768;
-  cam.height = 128;
-  s.set_camera(cam);
-  s.set_environment(std::move(env));
-  s.set_environment_description(std::move(env_desc));
-  s.commit();
-  return s;
-}
-
-Scene build_fig5(std::shared_ptr<const EnvironmentMap> env, std::string env_desc) {
-  Scene s;
-  // Gold: complex IOR at ~650 / 550 / 450 nm.
-  s.add_material("gold", single(make_conductor(0.25f, {0.143f, 0.374f, 1.442f}, {3.983f, 2.386f, 1.603f})), false);
-  s.add_material("ground", single(make_lambert({0.12f, 0.12f, 0.12f})), false);
-  TriangleMesh knot = make_torus_knot(2, 3, 2.0f, 0.9f, 0.42f, 600, 32);
-  for (Vec3& p : knot.positions) p = p + Vec3{0, 0, 1.36f};  // lowest point 0.04 above the ground
-  s.add_mesh("knot", std::move(knot), 0);
-  s.add_mesh("ground", make_quad({0, 0, 0}, 12.0f, 12.0f), 1);
-  CameraSpec cam;
-  cam.from = {0.0f, -9.0f, 4.6f};
-  cam.to = {0.0f, 0.0f, 1.2f};
-  cam.up = {0, 0, 1};
-  cam.vfov_degrees = 34.0f;
-  cam.width = 640;
-  cam.height = 360;
-  s.set_camera(cam);
-  s.set_environment(std::move(env));
-  s.set_environment_description(std::move(env_desc));
-  s.commit();
-  return s;
-}
-
-}  // namespace
-
-Scene make_builtin_scene(const std::string& name, std::shared_ptr<const EnvironmentMap> env) {
-  std::string desc = env ? (env->path().empty() ? std::string("user map") : env->path()) : std::string();
-  if (name == "fig1") {
-    if (!env) env = default_environment(&desc);
-    return build_fig1(std::move(env), desc);
-  }
-  if (name == "fig5") {
-    if (!env) {
-      const std::string studio = std::string(kBlenderWorldDir) + "/studio.exr";
-      std::error_code ec;
-      if (fs::exists(studio, ec)) {
-        env = std::make_shared<const EnvironmentMap>(EnvironmentMap::load(studio));
-        desc = studio;
-      } else {
-        env = default_environment(&desc);
-      }
-    }
-    return build_fig5(std::move(env), desc);
-  }
-  throw Error("unknown scene '" + name + "' (built-in scenes: fig1, fig5; or a .json scene file)");
-}
 
 // ---------------------------------------------------------------------------------------------
 // Scene files
@@ -351,6 +133,29 @@ class Fields {
   mutable std::set<std::string> used_;
 };
 
+/// A file name from a scene file: ${NAME} expands to an asset directory (docs/assets.md) and a
+/// relative name is relative to the scene file's directory.
+std::string scene_path(const Fields& f, const std::string& key, const fs::path& dir) {
+  std::string file = f.string(key), out;
+  for (std::size_t i = 0; i < file.size();) {
+    if (file.compare(i, 2, "${") != 0) {
+      out += file[i++];
+      continue;
+    }
+    const std::size_t end = file.find('}', i);
+    if (end == std::string::npos) f.fail_at(f.sub(key), "unterminated ${ in '" + file + "'");
+    const std::string name = file.substr(i + 2, end - i - 2);
+    try {
+      out += asset_directory(name);
+    } catch (const Error& e) {
+      f.fail_at(f.sub(key), e.what());
+    }
+    i = end + 1;
+  }
+  if (fs::path(out).is_relative()) out = (dir / out).string();
+  return out;
+}
+
 struct LobeSpec {
   std::shared_ptr<const Lobe> lobe;
   bool transmissive = false;
@@ -386,15 +191,86 @@ LobeSpec parse_lobe(const Fields& f) {
     out.lobe = make_coated_diffuse(base, alpha, ior);
   } else {
     f.fail_at(f.sub("type"), "unknown material type '" + type +
-                                 "' (expected diffuse, translucent, conductor, dielectric, coated-diffuse or mix)");
+                                 "' (expected diffuse, translucent, conductor, dielectric, coated-diffuse, pbr or mix)");
   }
   return out;
 }
 
-SceneMaterial parse_material(const Fields& f, const std::string& name) {
+/// A texture of a "pbr" material: a file name or {"file", "offset", "rotation", "scale", "wrap"}.
+TextureRef parse_texture(const Fields& owner, const std::string& key, const fs::path& dir, bool srgb, bool roughness_only) {
+  TextureRef r;
+  if (!owner.has(key)) return r;
+  std::string file;
+  if (owner.get(key).is_string()) {
+    file = scene_path(owner, key, dir);
+  } else {
+    Fields t = owner.object(key);
+    file = scene_path(t, "file", dir);
+    if (t.has("offset")) {
+      const Vec3 o = t.vec3("offset");
+      r.transform.offset = {o.x, o.y};
+    }
+    if (t.has("scale")) {
+      const Vec3 sc = t.vec3("scale");
+      r.transform.scale = {sc.x, sc.y};
+    }
+    r.transform.rotation = t.number("rotation", 0.0f) * kPi / 180.0f;
+    const std::string wrap = t.string("wrap", "repeat");
+    if (wrap == "clamp") r.wrap_s = r.wrap_t = TextureWrap::Clamp;
+    else if (wrap == "mirror") r.wrap_s = r.wrap_t = TextureWrap::Mirror;
+    else if (wrap != "repeat") t.fail_at(t.sub("wrap"), "expected repeat, clamp or mirror");
+    t.finish();
+  }
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) owner.fail_at(owner.sub(key), "texture file '" + file + "' does not exist");
+  try {
+    r.texture = Texture::load_file(file, srgb, "texture");
+  } catch (const Error& e) {
+    owner.fail_at(owner.sub(key), e.what());
+  }
+  if (roughness_only) {  // roughness from G (a grey image, or glTF's metallic-roughness layout), metallic 1
+    const Texture& t = *r.texture;
+    std::vector<float> px;
+    px.reserve(std::size_t(t.width()) * t.height() * 4);
+    for (int y = 0; y < t.height(); ++y)
+      for (int x = 0; x < t.width(); ++x) px.insert(px.end(), {0.0f, t.texel(x, y).g, 1.0f, 1.0f});
+    r.texture = std::make_shared<const Texture>(t.width(), t.height(), std::move(px));
+  }
+  return r;
+}
+
+SceneMaterial parse_pbr_material(const Fields& f, const std::string& name, const fs::path& dir) {
+  PbrParams p;
+  p.base_color = f.color("base_color", {0.8f, 0.8f, 0.8f});
+  p.metallic = f.number_in("metallic", 0.0f, 0.0f, 1.0f);
+  p.roughness = f.number_in("roughness", 0.5f, 0.0f, 1.0f);
+  p.transmission = f.number_in("transmission", 0.0f, 0.0f, 1.0f);
+  p.ior = f.number_in("ior", 1.5f, 1.0f, 4.0f);
+  p.clearcoat = f.number_in("clearcoat", 0.0f, 0.0f, 1.0f);
+  p.clearcoat_roughness = f.number_in("clearcoat_roughness", 0.0f, 0.0f, 1.0f);
+  p.emissive = f.color("emissive", {0, 0, 0}, 0.0f, 1e6f);
+  PbrTextures t;
+  t.base_color = parse_texture(f, "base_color_texture", dir, true, false);
+  if (f.has("metallic_roughness_texture") && f.has("roughness_texture"))
+    f.fail("give either 'metallic_roughness_texture' or 'roughness_texture', not both");
+  t.metallic_roughness = parse_texture(f, "metallic_roughness_texture", dir, false, false);
+  if (!t.metallic_roughness) t.metallic_roughness = parse_texture(f, "roughness_texture", dir, false, true);
+  t.normal = parse_texture(f, "normal_texture", dir, false, false);
+  t.normal_scale = f.number_in("normal_scale", 1.0f, -100.0f, 100.0f);
+  t.emissive = parse_texture(f, "emissive_texture", dir, true, false);
+  f.finish();
+  try {
+    return make_pbr_scene_material(name, std::make_shared<const PbrMaterial>(p, std::move(t)));
+  } catch (const Error& e) {
+    f.fail(e.what());
+  }
+}
+
+SceneMaterial parse_material(const Fields& f, const std::string& name, const fs::path& dir) {
   SceneMaterial m;
   m.name = name;
   const std::string type = f.string("type");
+  if (type == "pbr") return parse_pbr_material(f, name, dir);
   if (type == "mix") {
     const json& lobes = f.get("lobes");
     if (!lobes.is_array() || lobes.empty()) f.fail_at(f.sub("lobes"), "expected a non-empty array of lobes");
@@ -468,25 +344,36 @@ TriangleMesh load_mesh_file(const std::string& file, bool smooth, const Fields& 
   return m;
 }
 
-void apply_transform(TriangleMesh& m, const Fields& f) {
+/// An object's transform: scale, then rotation, then translation.
+struct Transform {
   Vec3 scale{1, 1, 1};
+  Mat3 rotation;
+  Vec3 translation{0, 0, 0};
+  Vec3 point(Vec3 p) const { return rotation * mul(p, scale) + translation; }
+  void apply(TriangleMesh& m) const {
+    for (Vec3& p : m.positions) p = point(p);
+    const Vec3 inv{1 / scale.x, 1 / scale.y, 1 / scale.z};
+    for (Vec3& n : m.normals) n = rotation * mul(n, inv);
+    if (scale.x * scale.y * scale.z < 0)  // a mirroring transform flips the winding
+      for (std::size_t k = 0; k < m.indices.size(); k += 3) std::swap(m.indices[k + 1], m.indices[k + 2]);
+  }
+};
+
+Transform parse_transform(const Fields& f) {
+  Transform tr;
   if (f.has("scale")) {
     const json& s = f.get("scale");
     if (s.is_number()) {
       const float k = f.number("scale");
-      scale = {k, k, k};
+      tr.scale = {k, k, k};
     } else {
-      scale = f.vec3("scale");
+      tr.scale = f.vec3("scale");
     }
-    if (!(scale.x != 0 && scale.y != 0 && scale.z != 0)) f.fail_at(f.sub("scale"), "must be non-zero");
+    if (!(tr.scale.x != 0 && tr.scale.y != 0 && tr.scale.z != 0)) f.fail_at(f.sub("scale"), "must be non-zero");
   }
-  const Mat3 R = euler_xyz(f.vec3("rotate", {0, 0, 0}));
-  const Vec3 t = f.vec3("translate", {0, 0, 0});
-  for (Vec3& p : m.positions) p = R * mul(p, scale) + t;
-  const Vec3 inv{1 / scale.x, 1 / scale.y, 1 / scale.z};
-  for (Vec3& n : m.normals) n = R * mul(n, inv);
-  if (scale.x * scale.y * scale.z < 0)  // a mirroring transform flips the winding
-    for (std::size_t k = 0; k < m.indices.size(); k += 3) std::swap(m.indices[k + 1], m.indices[k + 2]);
+  tr.rotation = euler_xyz(f.vec3("rotate", {0, 0, 0}));
+  tr.translation = f.vec3("translate", {0, 0, 0});
+  return tr;
 }
 
 std::shared_ptr<const EnvironmentMap> parse_environment(const Fields& f, const fs::path& dir, std::string* desc) {
@@ -507,8 +394,7 @@ std::shared_ptr<const EnvironmentMap> parse_environment(const Fields& f, const f
     *desc = "procedural sky";
     return std::make_shared<const EnvironmentMap>(make_procedural_sky(o));
   }
-  std::string file = f.string("file");
-  if (fs::path(file).is_relative()) file = (dir / file).string();
+  const std::string file = scene_path(f, "file", dir);
   EnvironmentMapOptions mo;
   mo.rotation = Mat3::rotate_z(f.number("rotation", 0.0f));
   mo.scale = f.number_in("scale", 1.0f, 0.0f, 1e9f);
@@ -533,23 +419,9 @@ std::shared_ptr<const EnvironmentMap> parse_environment(const Fields& f, const f
   }
 }
 
-}  // namespace
+void check_camera(const CameraSpec& cam, const Fields& f);
 
-Scene load_scene_file(const std::string& path, std::shared_ptr<const EnvironmentMap> env) {
-  std::ifstream in(path);
-  if (!in) throw Error("cannot open scene file '" + path + "'");
-  json j;
-  try {
-    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
-    throw Error(path + ": invalid JSON: " + e.what());
-  }
-  const fs::path dir = fs::path(path).parent_path();
-  Fields top(j, "", &path);
-  Scene s;
-
-  // camera
-  Fields cf = top.object("camera");
+CameraSpec parse_camera(const Fields& cf) {
   CameraSpec cam;
   cam.from = cf.vec3("from");
   cam.to = cf.vec3("to");
@@ -570,12 +442,99 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   cam.width = cf.integer("width", 640, 1, 16384);
   cam.height = cf.integer("height", 360, 1, 16384);
   cf.finish();
+  check_camera(cam, cf);
+  return cam;
+}
+
+void check_camera(const CameraSpec& cam, const Fields& f) {
   try {
     Camera check(cam, cam.width, cam.height);
   } catch (const Error& e) {
-    top.fail_at("camera", e.what());
+    f.fail(e.what());
   }
-  s.set_camera(cam);
+}
+
+/// A glTF object: one mesh per glTF material (or all with the scene material `material`), named
+/// "<name>/<glTF material>"; with "use_camera": true the file's camera, transformed, is the scene's.
+void add_gltf_object(Scene& s, const Fields& f, const fs::path& dir, const std::string& name,
+                     std::optional<CameraSpec>& camera) {
+  const std::string file = scene_path(f, "file", dir);
+  GltfModel model;
+  try {
+    model = load_gltf(file);
+  } catch (const Error& e) {
+    f.fail_at(f.sub("file"), e.what());
+  }
+  const Transform tr = parse_transform(f);
+  int override_material = -1;
+  if (f.has("material")) {
+    const std::string mname = f.string("material");
+    override_material = s.find_material(mname);
+    if (override_material < 0) f.fail_at(f.sub("material"), "unknown material '" + mname + "'");
+  }
+  if (f.boolean("use_camera", false)) {
+    if (camera) f.fail_at(f.sub("use_camera"), "the scene already has a camera");
+    if (!model.camera) f.fail_at(f.sub("use_camera"), "'" + file + "' has no camera");
+    CameraSpec c = *model.camera;
+    c.from = tr.point(c.from);
+    c.to = tr.point(c.to);
+    c.up = tr.rotation * c.up;
+    if (c.projection == Projection::Orthographic) c.ortho_height *= std::fabs(tr.scale.z);
+    c.width = f.integer("width", c.width, 1, 16384);
+    c.height = f.integer("height", c.height, 1, 16384);
+    check_camera(c, f);
+    camera = c;
+  }
+  f.finish();
+  if (override_material >= 0) {
+    TriangleMesh all;
+    bool uvs = true;  // kept when every part has them (a textured replacement material needs them)
+    for (const GltfModel::Part& p : model.parts) uvs = uvs && !p.mesh.uvs.empty();
+    for (GltfModel::Part& p : model.parts) {
+      const std::uint32_t base = std::uint32_t(all.positions.size());
+      all.positions.insert(all.positions.end(), p.mesh.positions.begin(), p.mesh.positions.end());
+      all.normals.insert(all.normals.end(), p.mesh.normals.begin(), p.mesh.normals.end());
+      if (uvs) all.uvs.insert(all.uvs.end(), p.mesh.uvs.begin(), p.mesh.uvs.end());
+      for (std::uint32_t i : p.mesh.indices) all.indices.push_back(base + i);
+    }
+    tr.apply(all);
+    s.add_mesh(name, std::move(all), override_material);
+    return;
+  }
+  std::vector<int> ids(model.materials.size(), -1);
+  for (GltfModel::Part& p : model.parts) {
+    int& id = ids[std::size_t(p.material)];
+    if (id < 0) {
+      SceneMaterial m = model.materials[std::size_t(p.material)];
+      m.name = name + "/" + m.name;
+      id = s.add_material(std::move(m));
+    }
+    tr.apply(p.mesh);
+    s.add_mesh(name + "/" + p.name, std::move(p.mesh), id);
+  }
+}
+
+}  // namespace
+
+Scene load_scene_file(const std::string& path, std::shared_ptr<const EnvironmentMap> env) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".gltf" || ext == ".glb") return load_gltf_scene(path, env);
+  std::ifstream in(path);
+  if (!in) throw Error("cannot open scene file '" + path + "'");
+  json j;
+  try {
+    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    throw Error(path + ": invalid JSON: " + e.what());
+  }
+  const fs::path dir = fs::path(path).parent_path();
+  Fields top(j, "", &path);
+  Scene s;
+
+  // camera (may come from a glTF object's file instead, see below)
+  std::optional<CameraSpec> camera;
+  if (top.has("camera")) camera = parse_camera(top.object("camera"));
 
   // environment (optional when overridden)
   std::string desc;
@@ -586,15 +545,18 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   s.set_environment(env);
   s.set_environment_description(desc);
 
-  // materials
-  (void)top.object("materials");  // must be an object
-  const json& mats = top.get("materials");
+  // materials (a scene of glTF objects may have none of its own)
+  static const json kNoMaterials = json::object();
+  const json* mats_ptr = &kNoMaterials;
+  if (top.has("materials")) {
+    (void)top.object("materials");  // must be an object
+    mats_ptr = &top.get("materials");
+  }
+  const json& mats = *mats_ptr;
   for (auto it = mats.begin(); it != mats.end(); ++it) {
     Fields f(it.value(), "materials." + it.key(), &path);
-    SceneMaterial m = parse_material(f, it.key());
-    s.add_material(m.name, std::move(m.bsdf), m.transmissive);
+    s.add_material(parse_material(f, it.key(), dir));
   }
-  if (s.material_count() == 0) top.fail_at("materials", "needs at least one material");
 
   // objects
   const json& objs = top.get("objects");
@@ -602,10 +564,14 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   for (std::size_t i = 0; i < objs.size(); ++i) {
     Fields f(objs[i], "objects[" + std::to_string(i) + "]", &path);
     const std::string type = f.string("type");
+    std::string name = f.string("name", type + "-" + std::to_string(i));
+    if (type == "gltf") {
+      add_gltf_object(s, f, dir, name, camera);
+      continue;
+    }
     const std::string mname = f.string("material");
     const int mat = s.find_material(mname);
     if (mat < 0) f.fail_at(f.sub("material"), "unknown material '" + mname + "'");
-    std::string name = f.string("name", type + "-" + std::to_string(i));
     if (type == "sphere") {
       const Vec3 c = f.vec3("center");
       const float r = f.number("radius");
@@ -615,8 +581,7 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
     } else if (type == "mesh" || type == "torus-knot" || type == "quad") {
       TriangleMesh m;
       if (type == "mesh") {
-        std::string file = f.string("file");
-        if (fs::path(file).is_relative()) file = (dir / file).string();
+        const std::string file = scene_path(f, "file", dir);
         m = load_mesh_file(file, f.boolean("smooth", true), f);
       } else if (type == "torus-knot") {
         m = make_torus_knot(f.integer("p", 2, 1, 32), f.integer("q", 3, 1, 32), f.number_in("major", 2.0f, 0, 1e6f),
@@ -626,16 +591,70 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
         const float size = f.number_in("size", 10.0f, 1e-6f, 1e9f);
         m = make_quad({0, 0, 0}, 0.5f * size, 0.5f * size);
       }
-      apply_transform(m, f);
+      parse_transform(f).apply(m);
       f.finish();
       s.add_mesh(name, std::move(m), mat);
     } else {
-      f.fail_at(f.sub("type"), "unknown object type '" + type + "' (expected sphere, mesh, torus-knot or quad)");
+      f.fail_at(f.sub("type"), "unknown object type '" + type + "' (expected sphere, mesh, torus-knot, quad or gltf)");
     }
   }
+  if (!camera) top.fail("missing field 'camera' (or a gltf object with \"use_camera\": true)");
+  s.set_camera(*camera);
   // Closed-surface proxy (docs/proxy.md): on unless the file says otherwise.
   s.set_proxy_closed_surfaces(top.boolean("closed_surfaces", true));
+  s.set_widen_bent_normals(top.boolean("widen_bent_normals", true));
   top.finish();
+  s.commit();
+  return s;
+}
+
+std::string asset_directory(const std::string& name) {
+  auto env_or = [](const char* var, std::string def) {
+    const char* v = std::getenv(var);
+    return v && *v ? std::string(v) : def;
+  };
+  if (name == "ASSIMP_MODELS") return env_or("ENVPIS_ASSIMP_MODELS", "/usr/share/assimp/models");
+  if (name == "BLENDER_WORLDS") return kBlenderWorldDir;
+  if (name == "ENVPIS_ASSETS") {
+    const char* home = std::getenv("HOME");
+    const std::string cache = env_or("XDG_CACHE_HOME", std::string(home ? home : ".") + "/.cache");
+    return env_or("ENVPIS_ASSETS", cache + "/envpis/assets");
+  }
+  throw Error("unknown variable ${" + name + "} (expected ASSIMP_MODELS, ENVPIS_ASSETS or BLENDER_WORLDS)");
+}
+
+Scene load_gltf_scene(const std::string& path, std::shared_ptr<const EnvironmentMap> env) {
+  GltfModel model = load_gltf(path);
+  Scene s;
+  Vec3 lo{kInfinity, kInfinity, kInfinity}, hi = -lo;
+  for (const GltfModel::Part& p : model.parts)
+    for (const Vec3& v : p.mesh.positions) {
+      lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
+      hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
+    }
+  std::vector<int> ids(model.materials.size(), -1);
+  for (GltfModel::Part& p : model.parts) {
+    int& id = ids[std::size_t(p.material)];
+    if (id < 0) id = s.add_material(model.materials[std::size_t(p.material)]);
+    s.add_mesh(p.name, std::move(p.mesh), id);
+  }
+  CameraSpec cam;
+  if (model.camera) {
+    cam = *model.camera;
+  } else {  // frame the bounding sphere from the front (-Y), 20 degrees above, with a 40 degree fov
+    const Vec3 c = (lo + hi) * 0.5f;
+    const float r = std::max(0.5f * length(hi - lo), 1e-3f);
+    const float dist = r / std::sin(0.5f * 40.0f * kPi / 180.0f);
+    const float el = 20.0f * kPi / 180.0f;
+    cam.from = c + Vec3{0, -std::cos(el), std::sin(el)} * dist;
+    cam.to = c;
+    cam.vfov_degrees = 40.0f;
+  }
+  s.set_camera(cam);
+  std::string desc = env ? (env->path().empty() ? std::string("user map") : env->path()) : std::string();
+  if (!env) env = default_environment(&desc);
+  s.set_environment(std::move(env));
+  s.set_environment_description(desc);
   s.commit();
   return s;
 }

@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""Aggregates the `envpis compare` runs of scripts/assets-bench.sh (asset scenes x maps, path integrator,
+medians over seeds) into the markdown tables of docs/assets.md:
+
+  1. per scene and map: overhead time(product) / time(mis) and whole-image relMSE ratios;
+  2. per object (pooled over the maps): relMSE ratios mis / product and mis-comp / product at equal
+     spp, and efficiency ratios (1 / (relMSE x time): product over mis and over mis-comp);
+  3. the issue's targets, met or not;
+  4. (when OUT/widen-*/ exists) product with and without widen_roughness on normal-mapped objects.
+
+    python3 scripts/assets_table.py OUT > OUT/table.md
+
+Ratios > 1 favour product. "Pooled" is the geometric mean over maps (and objects where stated).
+Glossy objects are those whose main lobe has GGX alpha in [0.05, 0.5] (GLOSSY below, from the scenes'
+materials: alpha = roughness^2 for pbr materials).
+"""
+import glob
+import json
+import math
+import os
+import sys
+
+TARGET_EFFICIENCY_OVER_MIS_COMP = 1.5  # pooled over the glossy objects
+TARGET_OVERHEAD = 1.10                 # time(product) / time(mis); goal 1.05
+
+# Main-lobe GGX alpha of the objects of scenes/assets-*.json (None: diffuse-dominated or mixed).
+ALPHA = {
+    "bunny": 0.1, "suzanne": 0.05, "clay": None, "plastic": 0.15, "floor": None,
+    "engine": 0.2025, "chrome": 0.0225, "glass": 0.0625, "lacquer": 0.04,
+}
+
+
+def alpha_of(scene, obj):
+    if obj in ALPHA and not (scene == "clearcoat" and obj == "floor"):
+        return ALPHA[obj]
+    if obj.endswith("_Base"):
+        return 0.19   # roughness 0.44
+    if obj.endswith("_Coated") or obj.endswith("_Coating"):
+        return 0.001  # roughness 0.03 (clear coats): near-mirror
+    return None
+
+
+def geomean(xs):
+    xs = [x for x in xs if x is not None and math.isfinite(x) and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
+
+
+def median(xs):
+    xs = sorted(x for x in xs if x is not None and math.isfinite(x))
+    if not xs:
+        return float("nan")
+    n = len(xs)
+    return xs[n // 2] if n % 2 else 0.5 * (xs[n // 2 - 1] + xs[n // 2])
+
+
+def f(x, d=2):
+    return "-" if x is None or not math.isfinite(x) else f"{x:.{d}f}"
+
+
+def strategies(block):
+    return {s["strategy"]: s for s in block["strategies"]}
+
+
+def load(out, prefix):
+    runs = {}
+    for path in sorted(glob.glob(os.path.join(out, prefix + "*", "metrics.json"))):
+        scene, _, env = os.path.basename(os.path.dirname(path))[len(prefix):].partition("--")
+        runs[(scene, env)] = json.load(open(path))
+    return runs
+
+
+def main(out):
+    runs = load(out, "")
+    runs = {k: v for k, v in runs.items() if not k[0].startswith("widen-")}
+    print("### Per scene and map (path integrator, equal spp; medians over seeds)\n")
+    print("| scene | map | overhead product/mis | relMSE mis/product | relMSE mis-comp/product | eff. product/mis | eff. product/mis-comp | equal time: relMSE mis/product | equal time: relMSE mis-comp/product |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    overheads = []
+    per_object = {}  # (scene, object) -> lists
+    for (scene, env), j in sorted(runs.items()):
+        s = strategies(j["equal_spp"])
+        m, c, p = s["mis"], s["mis-comp"], s["product"]
+        eff = lambda a, b: (a["relmse"] * a["seconds"]) / (b["relmse"] * b["seconds"])
+        overheads.append(j["overhead"]["ratio"])
+        t = strategies(j["equal_time"]) if j.get("equal_time") else {}
+        et = lambda a: f(t[a]["relmse"] / t["product"]["relmse"]) if a in t and "product" in t else "-"
+        print(f"| {scene} | {env} | {f(j['overhead']['ratio'])} | {f(m['relmse'] / p['relmse'])} | "
+              f"{f(c['relmse'] / p['relmse'])} | {f(eff(m, p))} | {f(eff(c, p))} | {et('mis')} | {et('mis-comp')} |")
+        for rm, rc, rp in zip(m["regions"], c["regions"], p["regions"]):
+            if rm["relmse"] <= 0 or rp["relmse"] <= 0:
+                continue
+            d = per_object.setdefault((scene, rm["name"]), {"mis": [], "comp": [], "eff_mis": [], "eff_comp": [], "worse": 0, "worse_noise": 0, "n": 0})
+            d["mis"].append(rm["relmse"] / rp["relmse"])
+            d["comp"].append(rc["relmse"] / rp["relmse"])
+            d["eff_mis"].append(rm["relmse"] * m["seconds"] / (rp["relmse"] * p["seconds"]))
+            d["eff_comp"].append(rc["relmse"] * c["seconds"] / (rp["relmse"] * p["seconds"]))
+            d["n"] += 1
+            # Worse than mis: the median over seeds is higher; beyond noise: by more than twice the
+            # combined standard error of the two medians.
+            se = math.hypot(rm.get("relmse_stderr", 0), rp.get("relmse_stderr", 0))
+            d["worse"] += rp["relmse"] > rm["relmse"]
+            d["worse_noise"] += rp["relmse"] > rm["relmse"] + 2 * se
+    print("\n### Per object, pooled over the maps (geometric means; min over maps in brackets)\n")
+    print("| scene | object | alpha | maps | relMSE mis/product | relMSE mis-comp/product | eff. product/mis | eff. product/mis-comp | maps where product is worse than mis (beyond 2 stderr) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    glossy_eff_comp, worse_total, worse_noise_total, object_maps = [], 0, 0, 0
+    for (scene, obj), d in sorted(per_object.items()):
+        a = alpha_of(scene, obj)
+        if a is not None and 0.05 <= a <= 0.5:
+            glossy_eff_comp += d["eff_comp"]
+        worse_total += d["worse"]
+        worse_noise_total += d["worse_noise"]
+        object_maps += d["n"]
+        print(f"| {scene} | {obj} | {f(a, 3) if a is not None else 'mixed or textured'} | {d['n']} | {f(geomean(d['mis']))} ({f(min(d['mis']))}) | "
+              f"{f(geomean(d['comp']))} ({f(min(d['comp']))}) | {f(geomean(d['eff_mis']))} | {f(geomean(d['eff_comp']))} | {d['worse']} ({d['worse_noise']}) |")
+    pooled = geomean(glossy_eff_comp)
+    ov = median(overheads)
+    print("\n### Targets\n")
+    print("| target | measured | met |")
+    print("|---|---|---|")
+    print(f"| efficiency product / mis-comp >= {TARGET_EFFICIENCY_OVER_MIS_COMP}, pooled over glossy objects (alpha 0.05-0.5) | {f(pooled)} | {'yes' if pooled >= TARGET_EFFICIENCY_OVER_MIS_COMP else 'no'} |")
+    print(f"| no object worse than mis (median over seeds) | {worse_total} of {object_maps} object-maps worse ({worse_noise_total} beyond 2 stderr) | {'yes' if worse_total == 0 else 'no'} |")
+    print(f"| overhead time(product) / time(mis) <= {TARGET_OVERHEAD} (median over scene-maps) | {f(ov)} (max {f(max(overheads) if overheads else float('nan'))}) | {'yes' if ov <= TARGET_OVERHEAD else 'no'} |")
+
+    widen = load(out, "widen-")
+    if widen:
+        print("\n### widen_roughness on normal-mapped objects (product, equal spp, medians over seeds)\n")
+        print("| scene | map | object | relMSE without | relMSE with | without / with |")
+        print("|---|---|---|---|---|---|")
+        ratios = []
+        for (scene, env), j in sorted(widen.items()):
+            if not scene.endswith("-on"):
+                continue
+            off = widen.get((scene[:-3] + "-off", env))
+            if not off:
+                continue
+            on_r = {r["name"]: r["relmse"] for r in strategies(j["equal_spp"])["product"]["regions"]}
+            off_r = {r["name"]: r["relmse"] for r in strategies(off["equal_spp"])["product"]["regions"]}
+            for name in sorted(on_r):
+                if not (name == "floor" or "Norm" in name) or not on_r[name] > 0:
+                    continue
+                ratios.append(off_r[name] / on_r[name])
+                print(f"| {scene[:-3]} | {env} | {name} | {off_r[name]:.4g} | {on_r[name]:.4g} | {f(off_r[name] / on_r[name])} |")
+        print(f"\nPooled (geometric mean) without / with: {f(geomean(ratios))} over {len(ratios)} object-maps.")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
