@@ -52,6 +52,8 @@ void validate(const AnalyzerOptions& o) {
   if (o.refine < 1 || o.refine > 64) throw Error("analyzer: refine must be in 1..64, got " + std::to_string(o.refine));
   if (!(o.refine_share > 0 && o.refine_share <= 1))
     throw Error("analyzer: refine share must be in (0, 1], got " + std::to_string(o.refine_share));
+  if (!(o.refine_tolerance > 0 && o.refine_tolerance <= 1))
+    throw Error("analyzer: refine tolerance must be in (0, 1], got " + std::to_string(o.refine_tolerance));
   for (int t : o.exact_levels)
     if (t < 1 || t > 1024) throw Error("analyzer: exact level must be in 1..1024, got " + std::to_string(t));
   envpis::validate(o.light_table);
@@ -118,9 +120,10 @@ class PointEvaluator {
     }
   }
 
-  /// The values at equal-area point p; false when f is 0 there even without visibility.
-  bool eval(Point2 p, DirectionValues* out) const {
-    const Vec3 d = equal_area_square_to_sphere(p);
+  /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
+  bool eval(Point2 p, DirectionValues* out) const { return eval(equal_area_square_to_sphere(p), out); }
+  /// The same at direction d (the caller mapped p to d).
+  bool eval(Vec3 d, DirectionValues* out) const {
     const Vec3 wl = frame_.to_local(d);
     if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
     // The inside of a closed surface never sees the environment (Material::set_closed_surface).
@@ -195,14 +198,18 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
       wb = power ? power_heuristic(1, pb, 1, pl) : balance_heuristic(1, pb, 1, pl);
     }
     StrategySums& ss = s.strategies[i];
-    for (int c = 0; c < 3; ++c) {
-      if (pl > 0 && wl > 0) {
-        ss.a_light[c] += w * double(wl) * wl * f2[c] / pl;
-        ss.b_light[c] += w * wl * f[c];
+    if (pl > 0 && wl > 0) {
+      const double a = w * double(wl) * wl / pl, b = w * wl;
+      for (int c = 0; c < 3; ++c) {
+        ss.a_light[c] += a * f2[c];
+        ss.b_light[c] += b * f[c];
       }
-      if (pb > 0 && wb > 0) {
-        ss.a_bsdf[c] += w * double(wb) * wb * f2[c] / pb;
-        ss.b_bsdf[c] += w * wb * f[c];
+    }
+    if (pb > 0 && wb > 0) {
+      const double a = w * double(wb) * wb / pb, b = w * wb;
+      for (int c = 0; c < 3; ++c) {
+        ss.a_bsdf[c] += a * f2[c];
+        ss.b_bsdf[c] += b * f[c];
       }
     }
   }
@@ -217,6 +224,8 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
   if (v.f_blind > 0)
     for (int c = 0; c < 3; ++c) s.product_sq[c] += w * f2[c] / v.f_blind;
   const float p_env = v.p_light[0];
+  const double add[4] = {w * v.f_blind, p_env > 0 ? w * f2[0] / p_env : 0.0, p_env > 0 ? w * f2[1] / p_env : 0.0,
+                         p_env > 0 ? w * f2[2] / p_env : 0.0};
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
     const int t = o.exact_levels[l];
     const Split sx = split(q.x, q.size, t), sy = split(q.y, q.size, t);
@@ -224,18 +233,49 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
       for (int cx = sx.c0; cx <= sx.c1; ++cx) {
         const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
         auto& cell = s.exact[l][static_cast<std::size_t>(cy) * t + cx];
-        cell[0] += share * w * v.f_blind;
-        if (p_env > 0)
-          for (int c = 0; c < 3; ++c) cell[1 + c] += share * w * f2[c] / p_env;
+        for (int k = 0; k < 4; ++k) cell[k] += share * add[k];
       }
   }
 }
 
-/// A texel evaluated by the first pass, with its shares of the integrals refinement watches.
-struct TexelScore {
-  int x, y;
-  float mean, sq_env, sq_bsdf;  // f_blind, f^2 / p_env, f^2 / p_bsdf (channel averages) at the centre
+/// The first pass's values of the integrands refinement watches, per fine texel (0 where f is 0):
+/// f_blind, f^2 / p_env and f^2 / p_bsdf (channel averages) at the texel's centre.
+struct TexelGrid {
+  int n = 0;
+  std::vector<std::array<float, 3>> q;
+  const std::array<float, 3>& at(int x, int y) const { return q[static_cast<std::size_t>(y) * n + x]; }
 };
+
+/// The texels whose midpoint value is not good enough: those that carry more than `share` of one of
+/// the watched integrals, or whose midpoint error, estimated from the second differences to their
+/// four neighbours (h^2/24 (f_xx + f_yy) per unit area), exceeds `tolerance` of it.
+std::vector<int> texels_to_refine(const TexelGrid& g, double share, double tolerance) {
+  std::array<double, 3> total{};
+  for (const auto& q : g.q)
+    for (int k = 0; k < 3; ++k) total[k] += q[k];
+  std::vector<int> out;
+  for (int y = 0; y < g.n; ++y)
+    for (int x = 0; x < g.n; ++x) {
+      const auto& c = g.at(x, y);
+      if (!(c[0] > 0)) continue;
+      std::array<float, 3> curvature{};
+      for (int axis = 0; axis < 2; ++axis) {
+        std::array<float, 3> side_sum{};
+        for (int step : {-1, 1}) {
+          int nx = x + (axis == 0 ? step : 0), ny = y + (axis == 1 ? step : 0);
+          equal_area_wrap(g.n, nx, ny);  // the neighbour on the sphere across the square's edge
+          const auto& nb = g.at(nx, ny);
+          for (int k = 0; k < 3; ++k) side_sum[k] += nb[k];
+        }
+        for (int k = 0; k < 3; ++k) curvature[k] += std::fabs(side_sum[k] - 2 * c[k]);
+      }
+      bool refine = false;
+      for (int k = 0; k < 3 && !refine; ++k)
+        refine = c[k] > share * total[k] || curvature[k] / 24 > tolerance * total[k];
+      if (refine) out.push_back(y * g.n + x);
+    }
+  return out;
+}
 
 }  // namespace
 
@@ -291,6 +331,37 @@ bool finish(const Sums& s, const AnalyzerOptions& options_, const std::vector<in
 
 }  // namespace
 
+namespace {
+
+constexpr int kMaxPointsPerSide = 64;  // in one texel
+constexpr double kDeepTolerance = 100;
+
+/// Evaluates the texel square `whole` on a k x k grid, adds the points to the sums (and to *kept, so
+/// that they can be taken out again) and returns their watched integrals (see TexelGrid).
+std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePoint& whole, int k, double texel_area,
+                                 std::vector<std::pair<DirectionValues, QuadraturePoint>>* kept,
+                                 const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s,
+                                 PointAnalysis* r) {
+  std::array<double, 3> watched{};
+  const double size = whole.size / k, w = texel_area / (double(k) * k);
+  DirectionValues v;
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const QuadraturePoint q{whole.x + i * size, whole.y + j * size, size, w};
+      if (!point.eval(q.centre(), &v)) continue;
+      ++r->evaluations;
+      accumulate(v, q, o, distribution, s);
+      kept->push_back({v, q});
+      const double fa = v.f.average();
+      watched[0] += w * v.f_blind;
+      if (v.p_light[0] > 0) watched[1] += w * fa * fa / v.p_light[0];
+      if (v.p_bsdf > 0) watched[2] += w * fa * fa / v.p_bsdf;
+    }
+  return watched;
+}
+
+}  // namespace
+
 std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint64_t jitter) const {
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit) || hit.material < 0) return std::nullopt;
@@ -303,42 +374,57 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   PointAnalysis r;
 
   // Pass 1: the centre of every fine texel.
-  std::vector<TexelScore> scores;
+  TexelGrid grid;
+  grid.n = n;
+  grid.q.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
   DirectionValues v;
-  for (int y = 0; y < n; ++y)
+  std::vector<float> u(static_cast<std::size_t>(n)), vy(static_cast<std::size_t>(n)), dx(u.size()), dy(u.size()),
+      dz(u.size());
+  for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = (float(x) + 0.5f) / float(n);
+  for (int y = 0; y < n; ++y) {
+    std::fill(vy.begin(), vy.end(), (float(y) + 0.5f) / float(n));
+    equal_area_square_to_sphere(u.size(), u.data(), vy.data(), dx.data(), dy.data(), dz.data());
     for (int x = 0; x < n; ++x) {
       const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
-      if (!point.eval(q.centre(), &v)) continue;
+      const std::size_t i = static_cast<std::size_t>(x);
+      if (!point.eval(Vec3{dx[i], dy[i], dz[i]}, &v)) continue;
       ++r.evaluations;
       accumulate(v, q, options_, distribution_, s);
       const float fa = v.f.average();
-      scores.push_back({x, y, v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
-                        v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f});
+      grid.q[static_cast<std::size_t>(y) * n + x] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                                                     v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
     }
+  }
 
-  // Pass 2: texels that carry more than refine_share of an integral, on a refine x refine grid.
+  // Pass 2: the texels whose midpoint is not good enough, on a refine x refine grid each, and again
+  // refine times finer while that changes the texel's watched integrals by more than
+  // kDeepTolerance x refine_tolerance of their totals (a sun's edge needs 16 x 16 points per texel).
   const int m = options_.refine;
   if (m > 1) {
-    double total[3] = {0, 0, 0};
-    for (const TexelScore& t : scores) {
-      total[0] += t.mean;
-      total[1] += t.sq_env;
-      total[2] += t.sq_bsdf;
-    }
-    const double share = options_.refine_share;
-    for (const TexelScore& t : scores) {
-      if (!(t.mean > share * total[0] || t.sq_env > share * total[1] || t.sq_bsdf > share * total[2])) continue;
-      const QuadraturePoint whole{double(t.x) / n, double(t.y) / n, 1.0 / n, -texel_area};
+    std::array<double, 3> total{};
+    for (const auto& q : grid.q)
+      for (int k = 0; k < 3; ++k) total[k] += double(q[k]) * texel_area;
+    std::vector<std::pair<DirectionValues, QuadraturePoint>> kept;
+    for (int t : texels_to_refine(grid, options_.refine_share, options_.refine_tolerance)) {
+      const QuadraturePoint whole{double(t % n) / n, double(t / n) / n, 1.0 / n, -texel_area};
       point.eval(whole.centre(), &v);
       accumulate(v, whole, options_, distribution_, s);
-      for (int j = 0; j < m; ++j)
-        for (int i = 0; i < m; ++i) {
-          const double size = 1.0 / (double(n) * m);
-          const QuadraturePoint q{whole.x + i * size, whole.y + j * size, size, texel_area / (double(m) * m)};
-          if (!point.eval(q.centre(), &v)) continue;
-          ++r.evaluations;
-          accumulate(v, q, options_, distribution_, s);
+      std::array<double, 3> previous;
+      for (int k = 0; k < 3; ++k) previous[k] = double(grid.q[static_cast<std::size_t>(t)][k]) * texel_area;
+      for (int k = m;; k *= m) {
+        kept.clear();
+        const std::array<double, 3> current = add_square(point, whole, k, texel_area, &kept, options_, distribution_, s, &r);
+        if (k * m > kMaxPointsPerSide) break;
+        double change = 0;
+        for (int q = 0; q < 3; ++q)
+          if (total[q] > 0) change = std::max(change, std::fabs(current[q] - previous[q]) / total[q]);
+        if (change / m <= kDeepTolerance * options_.refine_tolerance) break;
+        for (auto& [value, point_q] : kept) {
+          point_q.w = -point_q.w;
+          accumulate(value, point_q, options_, distribution_, s);
         }
+        previous = current;
+      }
     }
   }
   if (!finish(s, options_, distribution_, cell_mass_, &r)) return std::nullopt;

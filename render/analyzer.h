@@ -27,8 +27,10 @@
 //
 // Quadrature: one point per fine texel of the environment table (the equal-area square, where every
 // light density of the renderer is piecewise constant), then every texel that carries more than
-// `refine_share` of the integral, of integral f^2 / p_env or of integral f^2 / p_bsdf is evaluated
-// again on a refine x refine grid of points (the lobe's peak, a sun's edge). Visibility is off by
+// `refine_share` of the integral, of integral f^2 / p_env or of integral f^2 / p_bsdf, or whose
+// midpoint error on one of them (estimated from the second differences to its neighbours) exceeds
+// `refine_tolerance` of it, is evaluated again on a refine x refine grid of points (the lobe's peak, a
+// sun's edge, the horizon). Visibility is off by
 // default, except for the one certain case: a closed transmissive surface's inside (local z < 0)
 // never sees the environment (Material::set_closed_surface). With `visibility` every quadrature
 // direction is traced.
@@ -49,7 +51,9 @@ struct AnalyzerOptions {
   Heuristic heuristic = Heuristic::Power;
   bool visibility = false;  ///< trace every quadrature direction (else: no occlusion but the certain one)
   int refine = 4;           ///< points per side in a refined texel, 1..64 (1: no refinement)
-  double refine_share = 1e-6;  ///< a texel is refined when it carries more than this share, (0, 1]
+  double refine_share = 1e-4;  ///< a texel is refined when it carries more than this share, (0, 1]
+  /// ...or when its midpoint error, estimated from its neighbours, exceeds this share, (0, 1]
+  double refine_tolerance = 1e-7;
   std::vector<int> exact_levels{12, 24, 48};  ///< T of the exact-T limits, each 1..1024
   OracleOptions oracle;
   ProductSamplerOptions product;

@@ -34,7 +34,8 @@ struct AnalyzeArgs {
   std::string strategies = "bsdf,env,mis,mis-comp,product,oracle";
   std::string points = "8";
   std::string refine = "4";
-  std::string refine_share = "1e-6";
+  std::string refine_share = "1e-4";
+  std::string refine_tolerance = "1e-7";
   std::string exact = "12,24,48";
   std::string seed = "0";
   std::string json_out;
@@ -70,6 +71,7 @@ AnalyzerOptions parse_options(const AnalyzeArgs& a, const CLI::App& sub, int* th
   o.visibility = a.visibility;
   o.refine = static_cast<int>(parse_integer("--refine", a.refine, 1, 64));
   o.refine_share = parse_number_in("--refine-share", a.refine_share, 1e-12, 1, "in [1e-12, 1]");
+  o.refine_tolerance = parse_number_in("--refine-tolerance", a.refine_tolerance, 1e-12, 1, "in [1e-12, 1]");
   o.exact_levels.clear();
   for (const std::string& t : split_list(a.exact))
     o.exact_levels.push_back(static_cast<int>(parse_integer("--exact", t, 1, 1024)));
@@ -236,8 +238,9 @@ void run(const AnalyzeArgs& a, const CLI::App& sub) {
   std::printf("scene        %s, environment %s\n", a.common.scene.c_str(), scene.environment_description().c_str());
   std::printf("points       %zu analyzed (up to %d per object; %zu with no light skipped), visibility %s\n",
               refs.size() - skipped, per_object, skipped, o.visibility ? "traced" : "off");
-  std::printf("quadrature   %d x %d texels, refined %d x %d above share %g: %.3g directions\n", analyzer->grid_resolution(),
-              analyzer->grid_resolution(), o.refine, o.refine, o.refine_share, double(evaluations));
+  std::printf("quadrature   %d x %d texels, refined %d x %d above share %g or error %g: %.3g directions\n",
+              analyzer->grid_resolution(), analyzer->grid_resolution(), o.refine, o.refine, o.refine_share,
+              o.refine_tolerance, double(evaluations));
   std::printf("seconds      %.2f (tables %.2f)\n", seconds, analyzer->build_seconds());
   print_table(scene, results, sums, o);
 
@@ -250,6 +253,7 @@ void run(const AnalyzeArgs& a, const CLI::App& sub) {
   j["grid_resolution"] = analyzer->grid_resolution();
   j["refine"] = o.refine;
   j["refine_share"] = o.refine_share;
+  j["refine_tolerance"] = o.refine_tolerance;
   j["light_table"] = {{"top", o.light_table.top_resolution}, {"fine", analyzer->grid_resolution()},
                       {"peak_ratio", o.light_table.peak_ratio}};
   j["oracle"] = {{"resolution", o.oracle.resolution}, {"directions", o.oracle.directions}};
@@ -308,6 +312,11 @@ const RegisterCommand reg{{"analyze",
                                  ->capture_default_str();
                              sub.add_option("--refine-share", a->refine_share,
                                             "refine texels carrying more than this share of an integral")
+                                 ->type_name("X")
+                                 ->capture_default_str();
+                             sub.add_option("--refine-tolerance", a->refine_tolerance,
+                                            "refine texels whose estimated midpoint error exceeds this share of an "
+                                            "integral")
                                  ->type_name("X")
                                  ->capture_default_str();
                              sub.add_option("--exact", a->exact, "T of the exact-T limits, comma-separated")

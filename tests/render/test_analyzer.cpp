@@ -175,8 +175,10 @@ TEST(Analyzer, KnownZeroVariances) {
   }
 }
 
-// Refining the quadrature further (8 x 8 points per refined texel, and texels with a quarter of the
-// share refined) changes no V by more than 1%, on a real map with a small bright sun and the sharpest lobe of fig1.
+// Refining the quadrature further (8 x 8 points per refined texel, a quarter of the share and a tenth
+// of the error tolerance) changes no V by more than 1% (+ 1e-4: a relative variance of 0.008, as
+// BSDF sampling has on a sharp lobe, needs its integrals to 1e-4 for 1%), on a real map with a small
+// bright sun and the sharpest lobe of fig1.
 TEST(Analyzer, QuadratureConverges) {
   const std::string path = std::string(kBlenderWorldDir) + "/sunrise.exr";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "blender-data maps not installed";
@@ -188,16 +190,18 @@ TEST(Analyzer, QuadratureConverges) {
     AnalyzerOptions fine = coarse;
     fine.refine = 8;
     fine.refine_share = coarse.refine_share / 4;
+    fine.refine_tolerance = coarse.refine_tolerance / 10;
     const Analyzer a(scene, coarse), b(scene, fine);
     for (const ShadingPointRef& p : first_hit_points(scene, 1)) {
       const auto x = a.analyze(p.ray), y = b.analyze(p.ray);
       ASSERT_TRUE(x && y);
-      auto near = [](double u, double v) { return std::fabs(u - v) <= 0.01 * std::fabs(v) + 1e-12; };
+      auto near = [](double u, double v) { return std::fabs(u - v) <= 0.01 * std::fabs(v) + 1e-4; };
       for (std::size_t s = 0; s < coarse.strategies.size(); ++s) {
         EXPECT_PRED2(near, x->v[s], y->v[s]) << to_string(coarse.strategies[s]);
         if (std::isfinite(y->v_light[s])) EXPECT_PRED2(near, x->v_light[s], y->v_light[s]);
       }
       for (std::size_t l = 0; l < coarse.exact_levels.size(); ++l) EXPECT_PRED2(near, x->v_exact[l], y->v_exact[l]);
+      EXPECT_PRED2(near, x->v_product, y->v_product);
       EXPECT_GT(y->evaluations, x->evaluations);
     }
   }
@@ -209,6 +213,9 @@ TEST(Analyzer, RejectsBadOptions) {
   EXPECT_THROW(validate(o), Error);
   o = {};
   o.refine_share = 0;
+  EXPECT_THROW(validate(o), Error);
+  o = {};
+  o.refine_tolerance = 2;
   EXPECT_THROW(validate(o), Error);
   o = {};
   o.exact_levels = {0};
@@ -233,6 +240,7 @@ TEST(AnalyzeCommand, CleanErrors) {
       {"--sampler sobol", "--sampler: has no meaning for analyze"},
       {"--refine 0", "--refine: must be in 1..64"},
       {"--refine-share 2", "--refine-share: must be in [1e-12, 1]"},
+      {"--refine-tolerance 0", "--refine-tolerance: must be in [1e-12, 1]"},
       {"--exact 12,x", "--exact: expected an integer"},
       {"--exact 0", "--exact: must be in 1..1024"},
       {"--json /nonexistent-dir/a.json", "cannot write --json"},
