@@ -51,12 +51,7 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
-AnalyzerOptions parse_options(const AnalyzeArgs& a, const CLI::App& sub, int* threads) {
-  if (a.common.integrator != "direct")
-    throw Error("--integrator: analyze models the direct integrator only, got '" + a.common.integrator + "'");
-  if (sub.count("--sampler") || sub.count("--max-depth"))
-    throw Error(std::string(sub.count("--sampler") ? "--sampler" : "--max-depth") +
-                ": has no meaning for analyze (it integrates exactly, with no samples and no paths)");
+AnalyzerOptions parse_options(const AnalyzeArgs& a, int* threads) {
   RenderOptions ro;
   a.common.apply(ro);
   *threads = ro.threads;
@@ -99,8 +94,8 @@ double object_mean(const ObjectResult& r, F get) {
   return geometric_mean(v);
 }
 
-struct Summary {  // one object's geometric means
-  std::vector<double> v, v_light, v_exact;
+struct Summary {  // one object's geometric means (and arithmetic means of v, as relMSE averages pixels)
+  std::vector<double> v, v_light, v_exact, v_mean;
   double v_product = 0;
 };
 
@@ -109,6 +104,9 @@ Summary summarize(const ObjectResult& r, const AnalyzerOptions& o) {
   for (std::size_t i = 0; i < o.strategies.size(); ++i) {
     s.v.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v[i]; }));
     s.v_light.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v_light[i]; }));
+    double sum = 0;
+    for (const PointAnalysis& p : r.points) sum += p.v[i];
+    s.v_mean.push_back(r.points.empty() ? std::nan("") : sum / double(r.points.size()));
   }
   s.v_product = object_mean(r, [](const PointAnalysis& p) { return p.v_product; });
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l)
@@ -193,9 +191,9 @@ void print_table(const Scene& scene, const std::vector<ObjectResult>& results, c
   std::printf("(product*: sampling exactly proportional to BSDF x cos x environment, without visibility)\n");
 }
 
-void run(const AnalyzeArgs& a, const CLI::App& sub) {
+void run(const AnalyzeArgs& a) {
   int threads = 0;
-  const AnalyzerOptions o = parse_options(a, sub, &threads);
+  const AnalyzerOptions o = parse_options(a, &threads);
   const int per_object = static_cast<int>(parse_integer("--points", a.points, 1, 100000));
   const std::uint64_t seed = static_cast<std::uint64_t>(parse_integer("--seed", a.seed, 0, INT64_MAX));
   if (!a.json_out.empty()) check_writable_file(a.json_out, "--json");
@@ -270,14 +268,16 @@ void run(const AnalyzeArgs& a, const CLI::App& sub) {
     oj["name"] = info.name;
     oj["material"] = scene.material(info.material).name;
     oj["points"] = results[r].points.size();
-    json v, vl, ex;
+    json v, vm, vl, ex;
     for (std::size_t i = 0; i < o.strategies.size(); ++i) {
       v[to_string(o.strategies[i])] = finite_or_null(sums[r].v[i]);
+      vm[to_string(o.strategies[i])] = finite_or_null(sums[r].v_mean[i]);
       vl[to_string(o.strategies[i])] = finite_or_null(sums[r].v_light[i]);
     }
     for (std::size_t l = 0; l < o.exact_levels.size(); ++l)
       ex[std::to_string(o.exact_levels[l])] = finite_or_null(sums[r].v_exact[l]);
     oj["v"] = v;
+    oj["v_mean"] = vm;
     oj["v_light"] = vl;
     oj["v_product_limit"] = finite_or_null(sums[r].v_product);
     oj["v_exact"] = ex;
@@ -326,10 +326,13 @@ const RegisterCommand reg{{"analyze",
                                  ->type_name("INT")
                                  ->capture_default_str();
                              a->common.add_sampling_options(sub);
+                             // The analyzer models the direct integrator and integrates exactly: no
+                             // paths, no random numbers.
+                             for (const char* name : {"--integrator", "--sampler", "--max-depth"})
+                               sub.remove_option(sub.get_option(name));
                              sub.add_option("--json", a->json_out, "write every number to this JSON file")
                                  ->type_name("FILE.json");
-                             CLI::App* self = &sub;
-                             sub.callback([a, self] { run(*a, *self); });
+                             sub.callback([a] { run(*a); });
                            }}};
 
 }  // namespace

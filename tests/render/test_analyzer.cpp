@@ -236,8 +236,6 @@ TEST(AnalyzeCommand, CleanErrors) {
       {"--points 0", "--points: must be in 1..100000"},
       {"--strategies foo", "--strategies: unknown strategy 'foo'"},
       {"--strategies ,", "--strategies: expected a comma-separated list"},
-      {"--integrator path", "--integrator: analyze models the direct integrator only"},
-      {"--sampler sobol", "--sampler: has no meaning for analyze"},
       {"--refine 0", "--refine: must be in 1..64"},
       {"--refine-share 2", "--refine-share: must be in [1e-12, 1]"},
       {"--refine-tolerance 0", "--refine-tolerance: must be in [1e-12, 1]"},
