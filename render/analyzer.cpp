@@ -9,7 +9,6 @@
 #include <limits>
 
 #include "render/camera.h"
-#include "render/hash.h"
 #include "render/integrator.h"
 
 namespace envpis::render {

@@ -30,7 +30,8 @@
 // `refine_share` of the integral, of integral f^2 / p_env or of integral f^2 / p_bsdf, or whose
 // midpoint error on one of them (estimated from the second differences to its neighbours) exceeds
 // `refine_tolerance` of it, is evaluated again on a refine x refine grid of points (the lobe's peak, a
-// sun's edge, the horizon). Visibility is off by
+// sun's edge, the horizon), and refine times finer again while that still moves its integrals (up
+// to 64 x 64 points per texel). Accuracy and cost are measured in docs/analyzer.md. Visibility is off by
 // default, except for the one certain case: a closed transmissive surface's inside (local z < 0)
 // never sees the environment (Material::set_closed_surface). With `visibility` every quadrature
 // direction is traced.
@@ -69,6 +70,8 @@ struct PointAnalysis {
   std::vector<double> v;           ///< per options.strategies: the renderer's one-sample estimator
   std::vector<double> v_light;     ///< per options.strategies: its light distribution alone
   std::vector<double> bias;        ///< per options.strategies: (E F - I) / I, channel mean (0 up to round-off)
+  // v_light is the light sample's relative mean squared error: its variance when p_l > 0 wherever f > 0
+  // (not so for mis-comp). The oracle's values are those of one draw of its jittered set-up.
   double v_product = 0;            ///< the exact product limit
   std::vector<double> v_exact;     ///< per options.exact_levels
   std::size_t evaluations = 0;     ///< quadrature directions evaluated

@@ -16,6 +16,7 @@
 
 #include "cli_util.h"
 #include "render/analyzer.h"
+#include "render/camera.h"
 #include "render/integrator.h"
 #include "render/sampler.h"
 #include "render/scenes.h"
@@ -205,6 +206,36 @@ TEST(Analyzer, QuadratureConverges) {
       EXPECT_GT(y->evaluations, x->evaluations);
     }
   }
+}
+
+// Tracing the quadrature directions changes nothing for a sphere alone (it only hides its own lower
+// hemisphere, which no direction reaches anyway), and lowers I when another sphere blocks part of
+// the sky.
+TEST(Analyzer, Visibility) {
+  const Scene lone = sphere_scene(single(make_lambert({0.8f, 0.8f, 0.8f})), false, smooth_sky());
+  AnalyzerOptions o = options_for({Strategy::Mis, Strategy::Product});
+  AnalyzerOptions traced = o;
+  traced.visibility = true;
+  for (const ShadingPointRef& p : first_hit_points(lone, 2)) {
+    const auto a = Analyzer(lone, o).analyze(p.ray), b = Analyzer(lone, traced).analyze(p.ray);
+    ASSERT_TRUE(a && b);
+    EXPECT_NEAR(b->integral[0], a->integral[0], 1e-3 * a->integral[0]);
+    EXPECT_NEAR(b->v[1], a->v[1], 1e-2 * a->v[1]);
+  }
+  Scene blocked;
+  blocked.add_material("m", single(make_lambert({0.8f, 0.8f, 0.8f})), false);
+  blocked.add_sphere("sphere", {0, 0, 0}, 1.0f, 0);
+  blocked.add_sphere("blocker", {0, 0, 2.5f}, 1.0f, 0);  // above: hides part of the sky of the top half
+  const CameraSpec cam = lone.camera();
+  blocked.set_camera(cam);
+  blocked.set_environment(smooth_sky());
+  blocked.commit();
+  const Camera camera(cam, cam.width, cam.height);
+  const Ray ray = camera.generate_ray(0.5f * cam.width, 0.3f * cam.height);  // the sphere's upper part
+  const auto a = Analyzer(blocked, o).analyze(ray), b = Analyzer(blocked, traced).analyze(ray);
+  ASSERT_TRUE(a && b);
+  EXPECT_LT(b->integral[0], 0.95 * a->integral[0]);
+  for (double bias : b->bias) EXPECT_LT(std::fabs(bias), 1e-4);
 }
 
 TEST(Analyzer, RejectsBadOptions) {
