@@ -24,10 +24,15 @@ float Integrator::mis_weight(float pdf_f, float pdf_g) const {
                                                 : balance_heuristic(1, pdf_f, 1, pdf_g);
 }
 
-namespace {
-// Same side of the geometric normal as the shading frame says (no light leaks through shading normals).
-inline bool sides_agree(Vec3 wi, Vec3 ng, float local_z) { return (dot(wi, ng) > 0) == (local_z > 0); }
-}  // namespace
+ShadingNormals shading_normals(const SurfaceHit& hit, bool transmissive, Vec3 wo) {
+  ShadingNormals sn{hit.ng, hit.ns};
+  if (!transmissive && dot(wo, sn.ng) < 0) {  // opaque materials are two-sided
+    sn.ng = -sn.ng;
+    sn.ns = -sn.ns;
+  }
+  if ((dot(wo, sn.ns) > 0) != (dot(wo, sn.ng) > 0)) sn.ns = sn.ng;  // shading normal facing away from the viewer
+  return sn;
+}
 
 Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log) const {
   Rgb L{0, 0, 0};
@@ -66,19 +71,14 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       L += beta * mat.emission;
     }
     const Material& bsdf = *bsdf_ptr;
-    Vec3 ng = hit.ng, ns = hit.ns;
-    if (!mat.transmissive && dot(wo, ng) < 0) {  // opaque materials are two-sided
-      ng = -ng;
-      ns = -ns;
-    }
-    if ((dot(wo, ns) > 0) != (dot(wo, ng) > 0)) ns = ng;  // shading normal facing away from the viewer
-    const Frame frame(ns);
+    const ShadingNormals sn = shading_normals(hit, mat.transmissive, wo);
+    const Frame frame(sn.ns);
     const Vec3 wo_l = frame.to_local(wo);
 
     // 1. Light sample.
     if (light.has_light_samples()) {
       ShadingContext sc;
-      sc.n = ns;
+      sc.n = sn.ns;
       sc.wo = wo;
       sc.wo_local = wo_l;
       sc.frame = &frame;
@@ -91,8 +91,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       if (ls.pdf > 0 && std::isfinite(ls.pdf) && is_valid_direction(ls.direction)) {
         const Vec3 wi = ls.direction;
         const Vec3 wi_l = frame.to_local(wi);
-        const bool above = dot(wi, ng) > 0;
-        if ((mat.transmissive || above) && sides_agree(wi, ng, wi_l.z)) {
+        if (direction_counts(wi, wi_l.z, sn, mat.transmissive)) {
           const Rgb f = bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
           if (!is_black(f)) {
             const Rgb Le = env_.eval(wi);
@@ -114,7 +113,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     if (!bs || !(bs->pdf > 0) || !is_finite(bs->weight) || is_black(bs->weight)) break;
     const Vec3 wi = frame.to_world(bs->wi);
     if (!is_valid_direction(wi)) break;
-    if ((!mat.transmissive && dot(wi, ng) <= 0) || !sides_agree(wi, ng, bs->wi.z)) break;
+    if (!direction_counts(wi, bs->wi.z, sn, mat.transmissive)) break;
     const Rgb beta_next = beta * bs->weight;
     Ray next{offset_ray_origin(hit.p, hit.ng, wi), normalize(wi), kInfinity};
     SurfaceHit next_hit;

@@ -46,6 +46,23 @@ struct IntegratorOptions {
 constexpr unsigned kPixelDimensions = 2;
 constexpr unsigned kDimensionsPerVertex = 8;
 
+/// The normals a hit is shaded with, seen from wo (unit, pointing away from the surface): an opaque
+/// material is two-sided, so both normals are flipped towards wo; a shading normal on the other side
+/// of wo than the geometric one is replaced by the geometric one.
+struct ShadingNormals {
+  Vec3 ng, ns;
+};
+ShadingNormals shading_normals(const SurfaceHit& hit, bool transmissive, Vec3 wo);
+
+/// Whether direction wi (world; local_z its component along the shading normal) can bring light to a
+/// hit with normals `sn`: above the geometric surface unless the material transmits, and on the same
+/// side of the geometric and the shading normal (no light leaks through shading normals). Light and
+/// BSDF samples outside this set contribute nothing to the direct estimate.
+inline bool direction_counts(Vec3 wi, float local_z, const ShadingNormals& sn, bool transmissive) {
+  const bool above = dot(wi, sn.ng) > 0;
+  return (transmissive || above) && above == (local_z > 0);
+}
+
 class Integrator {
  public:
   Integrator(const Scene& scene, const IntegratorOptions& options);

@@ -1,0 +1,506 @@
+#include "render/analyzer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "render/camera.h"
+#include "render/integrator.h"
+
+namespace envpis::render {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr int kMaxDistributions = 4;  // environment table, compensated table, product, oracle
+
+/// The integrand and every density at one quadrature direction.
+struct DirectionValues {
+  Rgb f;                // BSDF * |cos| * radiance * visibility
+  float f_blind = 0;    // channel average of f without visibility: what the limits sample
+  float p_bsdf = 0;
+  std::array<float, kMaxDistributions> p_light{};
+};
+
+/// Per strategy: integral of w_l^2 f^2 / p_l, w_b^2 f^2 / p_b, w_l f and w_b f, per channel.
+struct StrategySums {
+  std::array<double, 3> a_light{}, a_bsdf{}, b_light{}, b_bsdf{};
+};
+
+/// Running quadrature sums of one shading point.
+struct Sums {
+  std::array<double, 3> integral{};
+  double integral_blind = 0;
+  std::vector<StrategySums> strategies;
+  std::array<std::array<double, 3>, kMaxDistributions> light_sq{}, light_mean{};  // f^2/p and f where p > 0
+  std::array<double, 3> product_sq{};  // f^2 / f_blind
+  /// Per exact level, per cell: integral of f_blind, then f^2 / p_env per channel.
+  std::vector<std::vector<std::array<double, 4>>> exact;
+};
+
+inline double channel(Rgb c, int k) { return k == 0 ? c.r : (k == 1 ? c.g : c.b); }
+
+}  // namespace
+
+void validate(const AnalyzerOptions& o) {
+  if (o.strategies.empty()) throw Error("analyzer: no strategy given");
+  if (o.refine < 1 || o.refine > 64) throw Error("analyzer: refine must be in 1..64, got " + std::to_string(o.refine));
+  if (!(o.refine_share > 0 && o.refine_share <= 1))
+    throw Error("analyzer: refine share must be in (0, 1], got " + std::to_string(o.refine_share));
+  if (!(o.refine_tolerance > 0 && o.refine_tolerance <= 1))
+    throw Error("analyzer: refine tolerance must be in (0, 1], got " + std::to_string(o.refine_tolerance));
+  for (int t : o.exact_levels)
+    if (t < 1 || t > 1024) throw Error("analyzer: exact level must be in 1..1024, got " + std::to_string(t));
+  envpis::validate(o.light_table);
+}
+
+double geometric_mean(const std::vector<double>& values) {
+  double s = 0;
+  int n = 0;
+  for (double v : values)
+    if (v > 0 && std::isfinite(v)) {
+      s += std::log(v);
+      ++n;
+    }
+  return n > 0 ? std::exp(s / n) : kNaN;
+}
+
+std::vector<ShadingPointRef> first_hit_points(const Scene& scene, int per_object) {
+  if (per_object < 1) throw Error("analyzer: points per object must be at least 1");
+  const CameraSpec& spec = scene.camera();
+  const Camera camera(spec, spec.width, spec.height);
+  std::vector<std::vector<ShadingPointRef>> hits(scene.objects().size());
+  for (int y = 0; y < spec.height; ++y)
+    for (int x = 0; x < spec.width; ++x) {
+      const Ray ray = camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
+      SurfaceHit hit;
+      if (!scene.intersect(ray, &hit) || hit.object < 0) continue;
+      hits[static_cast<std::size_t>(hit.object)].push_back({hit.object, x, y, ray});
+    }
+  std::vector<ShadingPointRef> points;
+  for (const auto& h : hits) {
+    const std::size_t n = h.size(), m = std::min<std::size_t>(n, static_cast<std::size_t>(per_object));
+    for (std::size_t i = 0; i < m; ++i) points.push_back(h[(2 * i + 1) * n / (2 * m)]);
+  }
+  return points;
+}
+
+namespace {
+
+/// Everything about one shading point that the quadrature evaluates.
+class PointEvaluator {
+ public:
+  PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
+                 const std::vector<StrategyTables>& tables, std::uint64_t jitter)
+      : scene_(scene),
+        env_(scene.environment()),
+        hit_(hit),
+        mat_(scene.material(hit.material)),
+        sn_(shading_normals(hit, mat_.transmissive, wo)),
+        frame_(sn_.ns),
+        wo_l_(frame_.to_local(wo)),
+        visibility_(visibility) {
+    ShadingContext sc;
+    sc.n = sn_.ns;
+    sc.wo = wo;
+    sc.wo_local = wo_l_;
+    sc.frame = &frame_;
+    sc.bsdf = &mat_.bsdf;
+    sc.jitter = jitter;
+    sc.opaque = !mat_.transmissive;
+    samplers_.reserve(tables.size());
+    for (const StrategyTables& t : tables) {
+      samplers_.emplace_back(t);
+      samplers_.back().prepare(sc);
+    }
+  }
+
+  /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
+  bool eval(Point2 p, DirectionValues* out) const { return eval(equal_area_square_to_sphere(p), out); }
+  /// The same at direction d (the caller mapped p to d).
+  bool eval(Vec3 d, DirectionValues* out) const {
+    const Vec3 wl = frame_.to_local(d);
+    if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
+    // The inside of a closed surface never sees the environment (Material::set_closed_surface).
+    if (mat_.bsdf.closed_surface() && wl.z < 0) return false;
+    const Rgb fb = mat_.bsdf.eval(wo_l_, wl) * std::fabs(wl.z);
+    if (is_black(fb)) return false;
+    const Rgb f = fb * env_.eval(d);
+    if (is_black(f) || !is_finite(f)) return false;
+    out->f = f;
+    out->f_blind = f.average();
+    if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
+    out->p_bsdf = mat_.bsdf.pdf(wo_l_, wl);
+    for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = samplers_[k].pdf(d);
+    return true;
+  }
+
+ private:
+  const Scene& scene_;
+  const EnvironmentMap& env_;
+  SurfaceHit hit_;
+  const SceneMaterial& mat_;
+  ShadingNormals sn_;
+  Frame frame_;
+  Vec3 wo_l_;
+  bool visibility_;
+  std::vector<LightSampler> samplers_;
+};
+
+/// The cells [c0, c1] of a grid of t cells per side that the interval [lo, lo + size) meets (size at
+/// most one cell), and the share f0 of the interval that lies in c0.
+struct Split {
+  int c0, c1;
+  double f0;
+};
+inline Split split(double lo, double size, int t) {
+  const double a = lo * t, b = (lo + size) * t;
+  const int c0 = std::min(static_cast<int>(a), t - 1);
+  const int c1 = std::min(static_cast<int>(std::ceil(b)) - 1, t - 1);
+  if (c1 <= c0) return {c0, c0, 1.0};
+  return {c0, c1, (double(c1) - a) / (b - a)};
+}
+
+/// A quadrature point: the square [x, x + size) x [y, y + size) of the equal-area square it stands for,
+/// its solid angle w (negative: remove it) and its centre.
+struct QuadraturePoint {
+  double x, y, size, w;
+  Point2 centre() const { return {float(x + 0.5 * size), float(y + 0.5 * size)}; }
+};
+
+/// Adds one quadrature point's values to the sums. For the exact-T limits its square is split between
+/// the cells it straddles, as the cell masses of the environment density are.
+void accumulate(const DirectionValues& v, const QuadraturePoint& q, const AnalyzerOptions& o,
+                const std::vector<int>& distribution, Sums& s) {
+  const double w = q.w;
+  double f[3], f2[3];
+  for (int c = 0; c < 3; ++c) {
+    f[c] = channel(v.f, c);
+    f2[c] = f[c] * f[c];
+    s.integral[c] += w * f[c];
+  }
+  s.integral_blind += w * v.f_blind;
+  const bool power = o.heuristic == Heuristic::Power;
+  for (std::size_t i = 0; i < o.strategies.size(); ++i) {
+    const Strategy st = o.strategies[i];
+    const float pl = distribution[i] >= 0 ? v.p_light[static_cast<std::size_t>(distribution[i])] : 0.0f;
+    const float pb = v.p_bsdf;
+    float wl = 1, wb = 1;  // the integrator's weights (Integrator::li)
+    if (st == Strategy::Bsdf) wl = 0;
+    else if (st == Strategy::Env) wb = 0;
+    else {
+      wl = power ? power_heuristic(1, pl, 1, pb) : balance_heuristic(1, pl, 1, pb);
+      wb = power ? power_heuristic(1, pb, 1, pl) : balance_heuristic(1, pb, 1, pl);
+    }
+    StrategySums& ss = s.strategies[i];
+    if (pl > 0 && wl > 0) {
+      const double a = w * double(wl) * wl / pl, b = w * wl;
+      for (int c = 0; c < 3; ++c) {
+        ss.a_light[c] += a * f2[c];
+        ss.b_light[c] += b * f[c];
+      }
+    }
+    if (pb > 0 && wb > 0) {
+      const double a = w * double(wb) * wb / pb, b = w * wb;
+      for (int c = 0; c < 3; ++c) {
+        ss.a_bsdf[c] += a * f2[c];
+        ss.b_bsdf[c] += b * f[c];
+      }
+    }
+  }
+  for (std::size_t k = 0; k < kMaxDistributions; ++k) {
+    const float p_k = v.p_light[k];
+    if (!(p_k > 0)) continue;
+    for (int c = 0; c < 3; ++c) {
+      s.light_sq[k][c] += w * f2[c] / p_k;
+      s.light_mean[k][c] += w * f[c];
+    }
+  }
+  if (v.f_blind > 0)
+    for (int c = 0; c < 3; ++c) s.product_sq[c] += w * f2[c] / v.f_blind;
+  const float p_env = v.p_light[0];
+  const double add[4] = {w * v.f_blind, p_env > 0 ? w * f2[0] / p_env : 0.0, p_env > 0 ? w * f2[1] / p_env : 0.0,
+                         p_env > 0 ? w * f2[2] / p_env : 0.0};
+  for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
+    const int t = o.exact_levels[l];
+    const Split sx = split(q.x, q.size, t), sy = split(q.y, q.size, t);
+    for (int cy = sy.c0; cy <= sy.c1; ++cy)
+      for (int cx = sx.c0; cx <= sx.c1; ++cx) {
+        const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
+        auto& cell = s.exact[l][static_cast<std::size_t>(cy) * t + cx];
+        for (int k = 0; k < 4; ++k) cell[k] += share * add[k];
+      }
+  }
+}
+
+/// The first pass's values of the integrands refinement watches, per fine texel (0 where f is 0):
+/// f_blind, f^2 / p_env and f^2 / p_bsdf (channel averages) at the texel's centre.
+struct TexelGrid {
+  int n = 0;
+  std::vector<std::array<float, 3>> q;
+  const std::array<float, 3>& at(int x, int y) const { return q[static_cast<std::size_t>(y) * n + x]; }
+};
+
+/// The texels whose midpoint value is not good enough: those that carry more than `share` of one of
+/// the watched integrals, or whose midpoint error, estimated from the second differences to their
+/// four neighbours (h^2/24 (f_xx + f_yy) per unit area), exceeds `tolerance` of it.
+std::vector<int> texels_to_refine(const TexelGrid& g, double share, double tolerance) {
+  std::array<double, 3> total{};
+  for (const auto& q : g.q)
+    for (int k = 0; k < 3; ++k) total[k] += q[k];
+  std::vector<int> out;
+  for (int y = 0; y < g.n; ++y)
+    for (int x = 0; x < g.n; ++x) {
+      const auto& c = g.at(x, y);
+      if (!(c[0] > 0)) continue;
+      std::array<float, 3> curvature{};
+      for (int axis = 0; axis < 2; ++axis) {
+        std::array<float, 3> side_sum{};
+        for (int step : {-1, 1}) {
+          int nx = x + (axis == 0 ? step : 0), ny = y + (axis == 1 ? step : 0);
+          equal_area_wrap(g.n, nx, ny);  // the neighbour on the sphere across the square's edge
+          const auto& nb = g.at(nx, ny);
+          for (int k = 0; k < 3; ++k) side_sum[k] += nb[k];
+        }
+        for (int k = 0; k < 3; ++k) curvature[k] += std::fabs(side_sum[k] - 2 * c[k]);
+      }
+      bool refine = false;
+      for (int k = 0; k < 3 && !refine; ++k)
+        refine = c[k] > share * total[k] || curvature[k] / 24 > tolerance * total[k];
+      if (refine) out.push_back(y * g.n + x);
+    }
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+// Turns the sums into relative variances (channel means over the channels with I > 0).
+bool finish(const Sums& s, const AnalyzerOptions& options_, const std::vector<int>& distribution_,
+            const std::vector<std::vector<double>>& cell_mass_, PointAnalysis* r) {
+  const double peak = std::max({s.integral[0], s.integral[1], s.integral[2]});
+  if (!(peak > 0) || !std::isfinite(peak) || !(s.integral_blind > 0)) return false;
+  std::vector<int> channels;
+  for (int c = 0; c < 3; ++c) {
+    r->integral[c] = s.integral[c];
+    if (s.integral[c] > 1e-12 * peak) channels.push_back(c);
+  }
+  auto mean_over_channels = [&](auto term) {
+    double acc = 0;
+    for (int c : channels) acc += term(c, s.integral[c]);
+    return acc / double(channels.size());
+  };
+  for (std::size_t i = 0; i < options_.strategies.size(); ++i) {
+    const StrategySums& ss = s.strategies[i];
+    r->v.push_back(mean_over_channels([&](int c, double I) {
+      const double var = ss.a_light[c] + ss.a_bsdf[c] - ss.b_light[c] * ss.b_light[c] - ss.b_bsdf[c] * ss.b_bsdf[c];
+      return var / (I * I);
+    }));
+    r->bias.push_back(mean_over_channels([&](int c, double I) { return (ss.b_light[c] + ss.b_bsdf[c] - I) / I; }));
+    const int k = distribution_[i];
+    if (k < 0) {
+      r->v_light.push_back(kNaN);
+      continue;
+    }
+    // The light sample alone: relative mean squared error (its variance when p_l > 0 wherever f > 0).
+    r->v_light.push_back(mean_over_channels([&](int c, double I) {
+      const double mean = s.light_mean[k][c];
+      return (s.light_sq[k][c] - mean * mean + (I - mean) * (I - mean)) / (I * I);
+    }));
+  }
+  r->v_product = mean_over_channels([&](int c, double I) { return s.integral_blind * s.product_sq[c] / (I * I) - 1; });
+  for (std::size_t l = 0; l < options_.exact_levels.size(); ++l) {
+    const auto& cells = s.exact[l];
+    const auto& mass = cell_mass_[l];
+    r->v_exact.push_back(mean_over_channels([&](int c, double I) {
+      // p(w) = (S1[cell] / I_blind) p_env(w) / mass[cell]: integral f^2 / p = sum I_blind mass / S1 * S2.
+      double acc = 0;
+      for (std::size_t j = 0; j < cells.size(); ++j)
+        if (cells[j][0] > 0 && mass[j] > 0) acc += s.integral_blind * mass[j] / cells[j][0] * cells[j][1 + c];
+      return acc / (I * I) - 1;
+    }));
+  }
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+constexpr int kMaxPointsPerSide = 64;  // in one texel
+constexpr double kDeepTolerance = 100;
+
+/// Evaluates the texel square `whole` on a k x k grid, adds the points to the sums (and to *kept, so
+/// that they can be taken out again) and returns their watched integrals (see TexelGrid).
+std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePoint& whole, int k, double texel_area,
+                                 std::vector<std::pair<DirectionValues, QuadraturePoint>>* kept,
+                                 const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s,
+                                 PointAnalysis* r) {
+  std::array<double, 3> watched{};
+  const double size = whole.size / k, w = texel_area / (double(k) * k);
+  DirectionValues v;
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const QuadraturePoint q{whole.x + i * size, whole.y + j * size, size, w};
+      if (!point.eval(q.centre(), &v)) continue;
+      ++r->evaluations;
+      accumulate(v, q, o, distribution, s);
+      kept->push_back({v, q});
+      const double fa = v.f.average();
+      watched[0] += w * v.f_blind;
+      if (v.p_light[0] > 0) watched[1] += w * fa * fa / v.p_light[0];
+      if (v.p_bsdf > 0) watched[2] += w * fa * fa / v.p_bsdf;
+    }
+  return watched;
+}
+
+}  // namespace
+
+std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint64_t jitter) const {
+  SurfaceHit hit;
+  if (!scene_.intersect(camera_ray, &hit) || hit.material < 0) return std::nullopt;
+  const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, jitter);
+  const int n = grid_resolution();
+  const double texel_area = 4.0 * kPi / (double(n) * n);
+  Sums s;
+  s.strategies.resize(options_.strategies.size());
+  for (int t : options_.exact_levels) s.exact.emplace_back(static_cast<std::size_t>(t) * t, std::array<double, 4>{});
+  PointAnalysis r;
+
+  // Pass 1: the centre of every fine texel.
+  TexelGrid grid;
+  grid.n = n;
+  grid.q.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
+  DirectionValues v;
+  std::vector<float> u(static_cast<std::size_t>(n)), vy(static_cast<std::size_t>(n)), dx(u.size()), dy(u.size()),
+      dz(u.size());
+  for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = (float(x) + 0.5f) / float(n);
+  for (int y = 0; y < n; ++y) {
+    std::fill(vy.begin(), vy.end(), (float(y) + 0.5f) / float(n));
+    equal_area_square_to_sphere(u.size(), u.data(), vy.data(), dx.data(), dy.data(), dz.data());
+    for (int x = 0; x < n; ++x) {
+      const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
+      const std::size_t i = static_cast<std::size_t>(x);
+      if (!point.eval(Vec3{dx[i], dy[i], dz[i]}, &v)) continue;
+      ++r.evaluations;
+      accumulate(v, q, options_, distribution_, s);
+      const float fa = v.f.average();
+      grid.q[static_cast<std::size_t>(y) * n + x] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                                                     v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+    }
+  }
+
+  // Pass 2: the texels whose midpoint is not good enough, on a refine x refine grid each, and again
+  // refine times finer while that changes the texel's watched integrals by more than
+  // kDeepTolerance x refine_tolerance of their totals (a sun's edge needs 16 x 16 points per texel).
+  const int m = options_.refine;
+  if (m > 1) {
+    std::array<double, 3> total{};
+    for (const auto& q : grid.q)
+      for (int k = 0; k < 3; ++k) total[k] += double(q[k]) * texel_area;
+    std::vector<std::pair<DirectionValues, QuadraturePoint>> kept;
+    for (int t : texels_to_refine(grid, options_.refine_share, options_.refine_tolerance)) {
+      const QuadraturePoint whole{double(t % n) / n, double(t / n) / n, 1.0 / n, -texel_area};
+      point.eval(whole.centre(), &v);
+      accumulate(v, whole, options_, distribution_, s);
+      std::array<double, 3> previous;
+      for (int k = 0; k < 3; ++k) previous[k] = double(grid.q[static_cast<std::size_t>(t)][k]) * texel_area;
+      for (int k = m;; k *= m) {
+        kept.clear();
+        const std::array<double, 3> current = add_square(point, whole, k, texel_area, &kept, options_, distribution_, s, &r);
+        if (k * m > kMaxPointsPerSide) break;
+        double change = 0;
+        for (int q = 0; q < 3; ++q)
+          if (total[q] > 0) change = std::max(change, std::fabs(current[q] - previous[q]) / total[q]);
+        if (change / m <= kDeepTolerance * options_.refine_tolerance) break;
+        for (auto& [value, point_q] : kept) {
+          point_q.w = -point_q.w;
+          accumulate(value, point_q, options_, distribution_, s);
+        }
+        previous = current;
+      }
+    }
+  }
+  if (!finish(s, options_, distribution_, cell_mass_, &r)) return std::nullopt;
+  return r;
+}
+
+
+Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options) : scene_(scene), options_(options) {
+  validate(options_);
+  const auto t0 = std::chrono::steady_clock::now();
+  const EnvironmentMap& env = scene.environment();
+  // Distribution 0 is the environment table (env, mis, and the limits' fine density); the product
+  // shares it, as the renderer's product strategy does.
+  tables_.push_back(StrategyTables::build(env, Strategy::Mis, options_.oracle, options_.product, options_.light_table));
+  auto wants = [&](Strategy s) {
+    return std::find(options_.strategies.begin(), options_.strategies.end(), s) != options_.strategies.end();
+  };
+  if (wants(Strategy::MisComp))
+    tables_.push_back(StrategyTables::build(env, Strategy::MisComp, options_.oracle, options_.product, options_.light_table));
+  if (wants(Strategy::Product)) {
+    StrategyTables t = tables_.front();
+    t.strategy = Strategy::Product;
+    tables_.push_back(std::move(t));
+  }
+  if (wants(Strategy::Oracle))
+    tables_.push_back(StrategyTables::build(env, Strategy::Oracle, options_.oracle, options_.product, options_.light_table));
+  for (Strategy s : options_.strategies) {
+    int k = -1;
+    if (s != Strategy::Bsdf) {
+      const Strategy key = s == Strategy::Env ? Strategy::Mis : s;  // env draws from the same table as mis
+      for (std::size_t i = 0; i < tables_.size(); ++i)
+        if (tables_[i].strategy == key) k = static_cast<int>(i);
+    }
+    distribution_.push_back(k);
+  }
+  const int n = grid_resolution();
+  for (int t : options_.exact_levels)
+    if (t > n)
+      throw Error("analyzer: exact level " + std::to_string(t) + " is finer than the table's fine grid (" +
+                  std::to_string(n) + ")");
+  build_cell_masses();
+  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Analyzer::~Analyzer() = default;
+
+int Analyzer::grid_resolution() const { return tables_.front().table->fine_resolution(); }
+
+// The environment density's mass in every cell of every exact level: texels are split exactly where a
+// cell boundary crosses them (the density is constant over a texel).
+void Analyzer::build_cell_masses() {
+  const ImportanceTable& table = *tables_.front().table;
+  const int n = table.fine_resolution();
+  std::vector<double> texel_mass(static_cast<std::size_t>(n) * n);
+  const double area = 4.0 * kPi / (double(n) * n);
+  tbb::parallel_for(0, n, [&](int y) {
+    for (int x = 0; x < n; ++x) {
+      const Vec3 d = equal_area_square_to_sphere({(float(x) + 0.5f) / float(n), (float(y) + 0.5f) / float(n)});
+      texel_mass[static_cast<std::size_t>(y) * n + x] = double(table.pdf(d)) * area;
+    }
+  });
+  cell_mass_.clear();
+  for (int t : options_.exact_levels) {
+    std::vector<double> mass(static_cast<std::size_t>(t) * t, 0.0);
+    for (int y = 0; y < n; ++y) {
+      const Split sy = split(double(y) / n, 1.0 / n, t);
+      for (int x = 0; x < n; ++x) {
+        const Split sx = split(double(x) / n, 1.0 / n, t);
+        const double m = texel_mass[static_cast<std::size_t>(y) * n + x];
+        for (int cy = sy.c0; cy <= sy.c1; ++cy)
+          for (int cx = sx.c0; cx <= sx.c1; ++cx)
+            mass[static_cast<std::size_t>(cy) * t + cx] +=
+                m * (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
+      }
+    }
+    cell_mass_.push_back(std::move(mass));
+  }
+}
+
+}  // namespace envpis::render
