@@ -100,7 +100,8 @@ class PointEvaluator {
         env_(scene.environment()),
         hit_(hit),
         mat_(scene.material(hit.material)),
-        sn_(shading_normals(hit, mat_.transmissive, wo)),
+        hm_(resolve_material(scene, &hit_, &scratch_)),
+        sn_(shading_normals(hit_, mat_.transmissive, wo)),
         frame_(sn_.ns),
         wo_l_(frame_.to_local(wo)),
         visibility_(visibility) {
@@ -109,7 +110,8 @@ class PointEvaluator {
     sc.wo = wo;
     sc.wo_local = wo_l_;
     sc.frame = &frame_;
-    sc.bsdf = &mat_.bsdf;
+    sc.bsdf = hm_.bsdf;
+    sc.cos_bent = hm_.cos_bent;
     sc.jitter = jitter;
     sc.opaque = !mat_.transmissive;
     samplers_.reserve(tables.size());
@@ -120,21 +122,24 @@ class PointEvaluator {
   }
 
   /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
+  PointEvaluator(const PointEvaluator&) = delete;
+  PointEvaluator& operator=(const PointEvaluator&) = delete;
+
   bool eval(Point2 p, DirectionValues* out) const { return eval(equal_area_square_to_sphere(p), out); }
   /// The same at direction d (the caller mapped p to d).
   bool eval(Vec3 d, DirectionValues* out) const {
     const Vec3 wl = frame_.to_local(d);
     if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
     // The inside of a closed surface never sees the environment (Material::set_closed_surface).
-    if (mat_.bsdf.closed_surface() && wl.z < 0) return false;
-    const Rgb fb = mat_.bsdf.eval(wo_l_, wl) * std::fabs(wl.z);
+    if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
+    const Rgb fb = hm_.bsdf->eval(wo_l_, wl) * std::fabs(wl.z);
     if (is_black(fb)) return false;
     const Rgb f = fb * env_.eval(d);
     if (is_black(f) || !is_finite(f)) return false;
     out->f = f;
     out->f_blind = f.average();
     if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
-    out->p_bsdf = mat_.bsdf.pdf(wo_l_, wl);
+    out->p_bsdf = hm_.bsdf->pdf(wo_l_, wl);
     for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = samplers_[k].pdf(d);
     return true;
   }
@@ -142,8 +147,10 @@ class PointEvaluator {
  private:
   const Scene& scene_;
   const EnvironmentMap& env_;
-  SurfaceHit hit_;
+  SurfaceHit hit_;  // its shading normal bent by a normal map, if any
   const SceneMaterial& mat_;
+  Material scratch_;  // a textured material's lobes at this hit
+  HitMaterial hm_;    // points into scratch_: the evaluator is neither copied nor moved
   ShadingNormals sn_;
   Frame frame_;
   Vec3 wo_l_;

@@ -34,6 +34,28 @@ ShadingNormals shading_normals(const SurfaceHit& hit, bool transmissive, Vec3 wo
   return sn;
 }
 
+HitMaterial resolve_material(const Scene& scene, SurfaceHit* hit, Material* scratch) {
+  const SceneMaterial& mat = scene.material(hit->material);
+  HitMaterial out;
+  out.bsdf = &mat.bsdf;
+  if (!mat.textured()) {
+    out.emission = mat.emission;
+    return out;
+  }
+  mat.pbr->assemble(hit->uv, scratch);
+  scratch->set_closed_surface(mat.bsdf.closed_surface());
+  out.bsdf = scratch;
+  out.emission = mat.pbr->emission(hit->uv);
+  if (mat.pbr->has_normal_map()) {
+    const Vec3 n = mat.pbr->normal_mapped(hit->uv, hit->ns, hit->dpdu, hit->bitangent_sign);
+    if (dot(n, hit->ng) > 0) {
+      hit->ns = n;
+      if (scene.widen_bent_normals()) out.cos_bent = dot(n, hit->ng);
+    }
+  }
+  return out;
+}
+
 Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log) const {
   Rgb L{0, 0, 0};
   SurfaceHit hit;
@@ -51,26 +73,12 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     const float u_rr = rng.next1d();
 
     const SceneMaterial& mat = scene_.material(hit.material);
-    const Material* bsdf_ptr = &mat.bsdf;
-    float cos_bent = 1;
-    if (mat.textured()) {
-      // One material per thread, refilled at every textured shading point (no allocation once grown).
-      thread_local Material textured;
-      mat.pbr->assemble(hit.uv, &textured);
-      textured.set_closed_surface(mat.bsdf.closed_surface());
-      bsdf_ptr = &textured;
-      L += beta * mat.pbr->emission(hit.uv);
-      if (mat.pbr->has_normal_map()) {
-        const Vec3 n = mat.pbr->normal_mapped(hit.uv, hit.ns, hit.dpdu, hit.bitangent_sign);
-        if (dot(n, hit.ng) > 0) {
-          hit.ns = n;
-          if (scene_.widen_bent_normals()) cos_bent = dot(n, hit.ng);
-        }
-      }
-    } else if (!is_black(mat.emission)) {
-      L += beta * mat.emission;
-    }
-    const Material& bsdf = *bsdf_ptr;
+    // One material per thread for textured hits, refilled at each (no allocation once grown).
+    thread_local Material textured;
+    const HitMaterial hm = resolve_material(scene_, &hit, &textured);
+    L += beta * hm.emission;
+    const float cos_bent = hm.cos_bent;
+    const Material& bsdf = *hm.bsdf;
     const ShadingNormals sn = shading_normals(hit, mat.transmissive, wo);
     const Frame frame(sn.ns);
     const Vec3 wo_l = frame.to_local(wo);

@@ -54,6 +54,17 @@ struct ShadingNormals {
 };
 ShadingNormals shading_normals(const SurfaceHit& hit, bool transmissive, Vec3 wo);
 
+/// The BSDF at a hit: the scene material itself, or a textured one's lobes assembled at the hit's UV
+/// into `scratch` (no allocation once it has grown). A normal map bends hit->ns; cos_bent is then the
+/// cosine between the bent and the geometric normal when the scene widens the proxy for bent normals,
+/// else 1. emission is what the surface emits towards the viewer.
+struct HitMaterial {
+  const Material* bsdf = nullptr;
+  float cos_bent = 1;
+  Rgb emission;
+};
+HitMaterial resolve_material(const Scene& scene, SurfaceHit* hit, Material* scratch);
+
 /// Whether direction wi (world; local_z its component along the shading normal) can bring light to a
 /// hit with normals `sn`: above the geometric surface unless the material transmits, and on the same
 /// side of the geometric and the shading normal (no light leaks through shading normals). Light and
