@@ -20,6 +20,8 @@ import math
 import os
 import sys
 
+from paper_table import f, geomean, median  # the fig1 tables' pooling and formatting
+
 TARGET_EFFICIENCY_OVER_MIS_COMP = 1.5  # pooled over the glossy objects
 TARGET_OVERHEAD = 1.10                 # time(product) / time(mis); goal 1.05
 
@@ -38,23 +40,6 @@ def alpha_of(scene, obj):
     if obj.endswith("_Coated") or obj.endswith("_Coating"):
         return 0.001  # roughness 0.03 (clear coats): near-mirror
     return None
-
-
-def geomean(xs):
-    xs = [x for x in xs if x is not None and math.isfinite(x) and x > 0]
-    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
-
-
-def median(xs):
-    xs = sorted(x for x in xs if x is not None and math.isfinite(x))
-    if not xs:
-        return float("nan")
-    n = len(xs)
-    return xs[n // 2] if n % 2 else 0.5 * (xs[n // 2 - 1] + xs[n // 2])
-
-
-def f(x, d=2):
-    return "-" if x is None or not math.isfinite(x) else f"{x:.{d}f}"
 
 
 def strategies(block):
