@@ -16,6 +16,8 @@ namespace envpis {
 
 namespace {
 constexpr int kMaxTop = 256;
+constexpr int kMaxSubdivision = 8;
+constexpr int kMaxSubcells = 1024;  // T S
 constexpr int kMaxFine = 16384;
 constexpr int kAutoFineCap = 2904;  // the automatic N of a 4096 x 2048 map: 67 MB of table
 }  // namespace
@@ -24,6 +26,11 @@ void validate(const ImportanceTableOptions& options) {
   if (options.top_resolution < 1 || options.top_resolution > kMaxTop)
     throw Error("top-level resolution must be in 1.." + std::to_string(kMaxTop) + ", got " +
                 std::to_string(options.top_resolution));
+  if (options.subdivision < 1 || options.subdivision > kMaxSubdivision)
+    throw Error("sub-cell subdivision must be in 1.." + std::to_string(kMaxSubdivision) + ", got " +
+                std::to_string(options.subdivision));
+  if (options.top_resolution * options.subdivision > kMaxSubcells)
+    throw Error("top-level resolution times subdivision must be at most " + std::to_string(kMaxSubcells));
   if (options.fine_resolution < 0 || options.fine_resolution > kMaxFine)
     throw Error("fine resolution must be 0 (automatic) or in 1.." + std::to_string(kMaxFine));
   if (!(options.floor >= 0.0f && options.floor < 1.0f))
@@ -36,31 +43,44 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
   T_ = options.top_resolution;
+  S_ = options.subdivision;
+  const int TS = T_ * S_;
   int n = options.fine_resolution;
   if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)
     const double texels = double(map.width()) * double(map.height());
     const int n1 = static_cast<int>(std::ceil(std::sqrt(texels) - 1e-9));
     n = std::max(n1, std::min(2 * n1, kAutoFineCap));
   }
-  F_ = std::max(1, (n + T_ - 1) / T_);
+  int per_leaf = std::max(1, (n + TS - 1) / TS);  // fine texels per sub-cell along one axis
+  if (TS * per_leaf > kMaxFine) per_leaf = kMaxFine / TS;
+  F_ = per_leaf * S_;
   N_ = T_ * F_;
-  if (N_ > kMaxFine) {
-    F_ = kMaxFine / T_;
-    N_ = T_ * F_;
-  }
-  auto fine = std::make_shared<detail::FineLevel>(T_, F_);
+  auto fine = std::make_shared<detail::FineLevel>(TS, per_leaf);  // its cells are the sub-cells
   fine_ = fine;
   integral_ = detail::build_texel_importance(map, *fine, {options.floor, options.peak_ratio, options.compensated});
   empty_ = !(integral_ > 0);
-  build_top_level(fine->build());
+  build_levels(fine->build());
   build_cones();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 float ImportanceTable::importance(int x, int y) const { return fine_->values()[fine_->index(x, y)]; }
 
-void ImportanceTable::build_top_level(const std::vector<double>& cell_sums) {
-  const int cells = T_ * T_;
+// From the fine level's sums per sub-cell: the top cells' sums, the top level and each cell's
+// sub-cell distribution.
+void ImportanceTable::build_levels(const std::vector<double>& subcell_sums) {
+  const int cells = T_ * T_, per = S_ * S_, TS = T_ * S_;
+  std::vector<double> cell_sums(static_cast<std::size_t>(cells), 0.0);
+  env_sub_.assign(static_cast<std::size_t>(cells), DiscreteDistribution2D(S_, S_));
+  for (int c = 0; c < cells; ++c) {
+    float* m = env_sub_[c].values();
+    for (int s = 0; s < per; ++s) {
+      const double v = subcell_sums[static_cast<std::size_t>(((c / T_) * S_ + s / S_) * TS + (c % T_) * S_ + s % S_)];
+      cell_sums[c] += v;
+      m[s] = static_cast<float>(v);
+    }
+    env_sub_[c].update();
+  }
   double total = 0;
   for (double v : cell_sums) total += v;
   top_ = DiscreteDistribution2D(T_, T_);
@@ -68,14 +88,17 @@ void ImportanceTable::build_top_level(const std::vector<double>& cell_sums) {
   top_.update();
   for (auto& a : soa_) a.assign(static_cast<std::size_t>(top_.padded_size()), 0.0f);
   for (int c = 0; c < cells; ++c) soa_[5][c] = top_.values()[c];
+  sub_stride_ = S_ > 1 ? (per + detail::kCellPad - 1) / detail::kCellPad * detail::kCellPad : 0;
+  for (auto& a : sub_soa_) a.assign(static_cast<std::size_t>(cells) * sub_stride_, 0.0f);
+  for (int c = 0; c < cells && sub_stride_ > 0; ++c)
+    for (int s = 0; s < per; ++s) sub_soa_[5][static_cast<std::size_t>(c) * sub_stride_ + s] = env_sub_[c].pmf(s);
 }
 
 namespace {
-// A cone that contains every direction of top cell c of a T x T grid on the equal-area square.
-Cone bounding_cone(int T, int c) {
+// A cone that contains every direction of cell (cx, cy) of a T x T grid on the equal-area square.
+Cone bounding_cone(int T, int cx, int cy) {
   constexpr int kEdge = 256;  // boundary samples per cell edge
   constexpr int kInner = 16;  // interior grid for the axis
-  const int cx = c % T, cy = c / T;
   const float x0 = float(cx) / T, y0 = float(cy) / T, side = 1.0f / T;
   Cone cone;
   if (T <= 2) {  // cells of a quarter sphere or more: use the whole sphere
@@ -122,66 +145,107 @@ Cone bounding_cone(int T, int c) {
 }
 }  // namespace
 
+namespace {
+void store_cone(std::vector<float> (&soa)[6], std::size_t i, const Cone& cone) {
+  soa[0][i] = cone.axis.x;
+  soa[1][i] = cone.axis.y;
+  soa[2][i] = cone.axis.z;
+  soa[3][i] = cone.cos_half_angle;
+  soa[4][i] = cone.sin_half_angle;
+}
+// Padding entries: probability 0 and a cone that evaluates harmlessly.
+void store_padding(std::vector<float> (&soa)[6], std::size_t i) {
+  soa[2][i] = 1.0f;
+  soa[3][i] = 1.0f;
+}
+}  // namespace
+
 void ImportanceTable::build_cones() {
-  const int cells = T_ * T_;
+  const int cells = T_ * T_, per = S_ * S_;
   cones_.assign(cells, Cone{});
+  sub_cones_.assign(static_cast<std::size_t>(cells) * per, Cone{});
   detail::parallel_for(0, cells, [&](int begin, int end) {
-    for (int c = begin; c < end; ++c) cones_[c] = bounding_cone(T_, c);
+    for (int c = begin; c < end; ++c) {
+      cones_[c] = bounding_cone(T_, c % T_, c / T_);
+      for (int s = 0; s < per && S_ > 1; ++s)
+        sub_cones_[static_cast<std::size_t>(c) * per + s] =
+            bounding_cone(T_ * S_, (c % T_) * S_ + s % S_, (c / T_) * S_ + s / S_);
+    }
   });
-  for (int c = 0; c < cells; ++c) {
-    soa_[0][c] = cones_[c].axis.x;
-    soa_[1][c] = cones_[c].axis.y;
-    soa_[2][c] = cones_[c].axis.z;
-    soa_[3][c] = cones_[c].cos_half_angle;
-    soa_[4][c] = cones_[c].sin_half_angle;
-  }
-  // Padding cells: probability 0, a cone that evaluates harmlessly.
-  for (int c = cells; c < top_.padded_size(); ++c) {
-    soa_[2][c] = 1.0f;
-    soa_[3][c] = 1.0f;
+  if (S_ == 1) sub_cones_ = cones_;
+  for (int c = 0; c < cells; ++c) store_cone(soa_, c, cones_[c]);
+  for (int c = cells; c < top_.padded_size(); ++c) store_padding(soa_, c);
+  for (int c = 0; c < cells && sub_stride_ > 0; ++c) {
+    const std::size_t base = static_cast<std::size_t>(c) * sub_stride_;
+    for (int s = 0; s < per; ++s) store_cone(sub_soa_, base + s, sub_cones_[static_cast<std::size_t>(c) * per + s]);
+    for (int s = per; s < sub_stride_; ++s) store_padding(sub_soa_, base + s);
   }
 }
 
-int ImportanceTable::cell_of(Point2 p) const {
-  const int cx = std::clamp(static_cast<int>(p.x * T_), 0, T_ - 1);
-  const int cy = std::clamp(static_cast<int>(p.y * T_), 0, T_ - 1);
-  return cy * T_ + cx;
+ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
+  // The sub-cell first, and the top cell from it, so that the two always agree under rounding.
+  const int TS = T_ * S_;
+  const int lx = std::clamp(static_cast<int>(p.x * TS), 0, TS - 1);
+  const int ly = std::clamp(static_cast<int>(p.y * TS), 0, TS - 1);
+  return {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_, ly * TS + lx};
 }
+
+int ImportanceTable::cell_of(Point2 p) const { return locate(p).cell; }
 
 int ImportanceTable::cell_of_direction(Vec3 d) const {
   if (!is_valid_direction(d)) return -1;
   return cell_of(equal_area_sphere_to_square(d));
 }
 
-float ImportanceTable::pdf_in_cell(int c, Point2 p) const { return fine_->pdf(c, p); }
+namespace {
+// The fine-level cell (a sub-cell) of sub-cell s of top cell c.
+int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S) + (c % T) * S + s % S; }
+}  // namespace
 
-DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point2 u) const {
+float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
+  const Located at = locate(p);
+  if (at.cell != c) return 0.0f;
+  return env_sub_[c].pmf(at.sub) * float(S_ * S_) * fine_->pdf(at.leaf, p);
+}
+
+DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point2 u, const SubcellLevel* sub) const {
   DirectionSample out;
   if (empty_ || !top.valid()) return out;
   ENVPIS_ASSERT(top.width() == T_ && top.height() == T_);
   const DiscreteDistribution2D::Sample cell = top.sample(u);
   const int c = cell.y * T_ + cell.x;
-  const detail::FineLevel::Sample s = fine_->sample(c, cell.offset);
+  DiscreteDistribution2D::Sample in{0, 0, cell.offset, 1.0f};  // the sub-cell (S = 1: the cell itself)
+  if (S_ > 1) {
+    const DiscreteDistribution2D& level = sub ? sub->subcells(c) : env_sub_[c];
+    ENVPIS_ASSERT(level.valid() && level.width() == S_);
+    in = level.sample(cell.offset);
+  }
+  const detail::FineLevel::Sample s = fine_->sample(leaf_of(T_, S_, c, in.y * S_ + in.x), in.offset);
   out.direction = equal_area_square_to_sphere(s.p);
   out.cell = c;
   // Far from texel edges the sampled texel is the one pdf() finds: its density directly (the same
   // arithmetic); near an edge, pdf() of the direction, so the two always agree.
-  out.pdf = s.interior ? solid_angle_pdf(cell.pmf, s.pdf) : pdf(top, out.direction);
+  out.pdf = s.interior ? solid_angle_pdf(cell.pmf, in.pmf * float(S_ * S_) * s.pdf) : pdf(top, out.direction, sub);
   return out;
 }
 
-float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d) const {
+float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return 0.0f;
   const Point2 p = equal_area_sphere_to_square(d);
-  const int c = cell_of(p);
-  return solid_angle_pdf(top.pmf(c), fine_->pdf(c, p));
+  const Located at = locate(p);
+  const float cell_pmf = top.pmf(at.cell);
+  if (!(cell_pmf > 0)) return 0.0f;
+  const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).pmf(at.sub) : 1.0f;
+  return solid_angle_pdf(cell_pmf, sub_pmf * float(S_ * S_) * fine_->pdf(at.leaf, p));
 }
 
-Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d) const {
+Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return {0.5f, 0.5f};
   const Point2 p = equal_area_sphere_to_square(d);
-  const int c = cell_of(p);
-  return top.invert(c % T_, c / T_, fine_->invert(c, p));
+  const Located at = locate(p);
+  Point2 offset = fine_->invert(at.leaf, p);
+  if (S_ > 1) offset = (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).invert(at.sub % S_, at.sub / S_, offset);
+  return top.invert(at.cell % T_, at.cell / T_, offset);
 }
 
 detail::CellArrays detail::cell_arrays(const ImportanceTable& t) {
@@ -189,12 +253,21 @@ detail::CellArrays detail::cell_arrays(const ImportanceTable& t) {
   return {a[0].data(), a[1].data(), a[2].data(), a[3].data(), a[4].data(), a[5].data(), t.top_.padded_size()};
 }
 
+detail::CellArrays detail::subcell_arrays(const ImportanceTable& t, int c) {
+  const std::size_t o = static_cast<std::size_t>(c) * t.sub_stride_;
+  const auto& a = t.sub_soa_;
+  return {a[0].data() + o, a[1].data() + o, a[2].data() + o, a[3].data() + o, a[4].data() + o, a[5].data() + o,
+          t.sub_stride_};
+}
+
 std::size_t ImportanceTable::bytes_used() const {
   std::size_t b = sizeof(*this);
   b += fine_->bytes_used();
   b += static_cast<std::size_t>(top_.padded_size() + 2 * T_) * sizeof(float);
-  b += cones_.capacity() * sizeof(Cone);
+  b += (cones_.capacity() + sub_cones_.capacity()) * sizeof(Cone);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
+  for (const auto& a : sub_soa_) b += a.capacity() * sizeof(float);
+  b += env_sub_.size() * (sizeof(DiscreteDistribution2D) + sizeof(float) * (env_sub_.empty() ? 0 : env_sub_[0].padded_size() + 2 * S_));
   return b;
 }
 

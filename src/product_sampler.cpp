@@ -14,6 +14,10 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
   if (!(options.env_mix >= 0.0f && options.env_mix <= 1.0f)) throw Error("env_mix must be in [0, 1]");
   if (!(options.env_floor >= 0.0f && options.env_floor <= 1.0f)) throw Error("env_floor must be in [0, 1]");
   kernels_ = &detail::kernels_for(options.simd);
+  if (options.refine && table.subdivision() < 2)
+    throw Error("the refined product sampler needs a table with sub-cells (subdivision > 1)");
+  refine_ = options.refine;
+  if (refine_) sub_ = DiscreteDistribution2D(table.subdivision(), table.subdivision());
 }
 
 Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
@@ -21,6 +25,7 @@ Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
 bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   valid_ = false;
   fallback_ = false;
+  sub_cell_ = -1;
   if (table_->empty() || !is_valid_direction(n) || !is_valid_direction(wo)) return false;
   const int cells = table_->cell_count();
   prepared_ = prepare_proxy(proxy, n, wo, options_.proxy);
@@ -59,10 +64,31 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   return valid_;
 }
 
-DirectionSample ProductSampler::sample(Point2 u) const {
-  return valid_ ? table_->sample(top_, u) : DirectionSample{};
+const DiscreteDistribution2D& ProductSampler::subcells(int c) const {
+  if (!refine_ || fallback_ || !valid_) return table_->subcells(c);
+  if (c != sub_cell_) {
+    sub_cell_ = c;
+    const detail::CellArrays cells = detail::subcell_arrays(*table_, c);
+    kernels_->product_weights(cells, detail::to_lobe_params(prepared_), sub_.values());
+    float sum = sub_.update();
+    sub_env_ = !sub_.valid();  // the cell's cone reaches the proxy, none of its sub-cells' does
+    if (!sub_env_ && options_.env_floor > 0.0f) {  // the floor again, on the cell's shares
+      float* w = sub_.values();
+      const float a = 1.0f / sum, r = options_.env_floor;
+      for (int s = 0; s < table_->subdivision() * table_->subdivision(); ++s)
+        if (w[s] > 0.0f) w[s] = std::max(w[s] * a, r * cells.prob[s]);
+      sub_.update();
+    }
+  }
+  return sub_env_ ? table_->subcells(c) : sub_;
 }
 
-float ProductSampler::pdf(Vec3 wi) const { return valid_ ? table_->pdf(top_, wi) : 0.0f; }
+DirectionSample ProductSampler::sample(Point2 u) const {
+  return valid_ ? table_->sample(top_, u, this) : DirectionSample{};
+}
+
+float ProductSampler::pdf(Vec3 wi) const { return valid_ ? table_->pdf(top_, wi, this) : 0.0f; }
+
+Point2 ProductSampler::invert(Vec3 wi) const { return valid_ ? table_->invert(top_, wi, this) : Point2{0.5f, 0.5f}; }
 
 }  // namespace envpis

@@ -80,6 +80,59 @@ TEST(ImportanceTable, InvalidOptionsThrow) {
   ImportanceTableOptions o;
   o.floor = std::nanf("");
   EXPECT_THROW(ImportanceTable(map, o), Error);
+  for (const auto& [top, sub] : std::vector<std::pair<int, int>>{{12, 0}, {12, 9}, {200, 8}}) {
+    ImportanceTableOptions s;
+    s.top_resolution = top;
+    s.subdivision = sub;
+    EXPECT_THROW(ImportanceTable(map, s), Error) << top << " x " << sub;
+  }
+}
+
+// Sub-cells change how a sample walks down the levels, not the environment's density: a table with
+// S x S sub-cells has the density of the same table without them (same N), and samples it.
+TEST(ImportanceTable, SubcellsKeepTheEnvironmentDensity) {
+  const auto map = synthetic_sky(256, 128);
+  ImportanceTableOptions o;
+  o.fine_resolution = 480;
+  const ImportanceTable flat(map, o);
+  for (int S : {2, 4, 8}) {
+    o.subdivision = S;
+    const ImportanceTable t(map, o);
+    ASSERT_EQ(t.fine_resolution(), 480);
+    ASSERT_EQ(t.subdivision(), S);
+    std::mt19937_64 rng(S);
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 d = random_direction(rng);
+      ASSERT_NEAR(t.pdf(d), flat.pdf(d), 2e-5f * flat.pdf(d)) << S;
+      const int c = t.cell_of_direction(d);
+      const Point2 p = equal_area_sphere_to_square(d);
+      ASSERT_NEAR(t.pdf_in_cell(c, p), flat.pdf_in_cell(c, p), 2e-5f * flat.pdf_in_cell(c, p)) << S;
+    }
+    for (int c = 0; c < t.cell_count(); ++c) {
+      ASSERT_NEAR(t.cell_probability(c), flat.cell_probability(c), 1e-6f);
+      ASSERT_TRUE(t.subcells(c).valid());
+    }
+    const auto r = env_chi2(t, 40 + S, 3);
+    EXPECT_TRUE(r.passed) << "S = " << S << ": " << r.message;
+  }
+}
+
+// Every direction of a sub-cell lies inside the sub-cell's bounding cone.
+TEST(ImportanceTable, SubcellConesContainTheirSubcells) {
+  ImportanceTableOptions o;
+  o.subdivision = 4;
+  const ImportanceTable t(synthetic_sky(64, 32), o);
+  const int T = t.top_resolution(), S = 4;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (int c = 0; c < t.cell_count(); ++c)
+    for (int s = 0; s < S * S; ++s) {
+      const Cone& cone = t.subcell_cone(c, s);
+      for (int i = 0; i < 50; ++i) {
+        const float x = ((c % T) * S + s % S + U(rng)) / float(T * S), y = ((c / T) * S + s / S + U(rng)) / float(T * S);
+        ASSERT_GE(dot(equal_area_square_to_sphere({x, y}), cone.axis), cone.cos_half_angle - 1e-6f) << c << " " << s;
+      }
+    }
 }
 
 TEST(ImportanceTable, CellConesContainEveryDirectionOfTheirCell) {

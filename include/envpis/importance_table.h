@@ -3,13 +3,21 @@
 // Both levels live on the equal-area square, so every cell of a level subtends the same solid angle.
 //   top level:  T x T cells (T = 12 by default). Per cell: its probability E[c] (share of the map's
 //               importance), and a cone (axis, half-angle) that contains every direction of the cell.
-//   fine level: N x N texels, N = T * F. Each top cell owns the F x F texels inside it and its own
-//               piecewise-constant 2D distribution over them.
+//   sub-cells:  each top cell is cut into S x S sub-cells (S = 1 by default: the paper's two levels).
+//               Per sub-cell: its share of its top cell's importance and a bounding cone, which a
+//               refined sampler (ProductSampler with refine) weights again per shading point.
+//   fine level: N x N texels, N = T * F, F a multiple of S. Each sub-cell owns the F/S x F/S texels
+//               inside it and its own piecewise-constant 2D distribution over them.
 //
-// Fine resolution rule: N is the smallest multiple of T with N >= 2 sqrt(texel count), i.e. four table
+// Sampling goes down the levels with one u: a top cell from a T x T distribution (the environment's
+// own, or a product's), a sub-cell from an S x S distribution for that cell (SubcellLevel: again the
+// environment's own, or a product's), a texel, a point. Each level hands the remainder of u to the
+// next, so stratified u stay stratified, and the density is the product of the levels' probabilities.
+//
+// Fine resolution rule: N is the smallest multiple of T S with N >= 2 sqrt(texel count), i.e. four table
 // texels per map texel (1024x512 -> N = 1452, F = 121), but no more than 2904 unless the map alone
 // has more texels (then N^2 >= texel count: 4096x2048 -> 2904). ImportanceTableOptions::fine_resolution
-// overrides it (rounded up to a multiple of T). Why twice: table texels never line up with a lat-long
+// overrides it (rounded up to a multiple of T S). Why twice: table texels never line up with a lat-long
 // map's texels, so at equal resolution each table texel mixes several map texels and its importance
 // misstates what eval returns inside it (docs/decisions.md, "A fine table twice the map's resolution",
 // has the measurement).
@@ -49,6 +57,9 @@ class FineLevel;
 
 struct ImportanceTableOptions {
   int top_resolution = 12;  ///< T, 1..256
+  /// S: sub-cells per top cell along each axis, 1..8 (T S <= 1024). 1: the paper's two levels; a
+  /// refined ProductSampler needs S > 1.
+  int subdivision = 1;
   int fine_resolution = 0;  ///< N; 0 = derived from the map's texel count (see above)
   float floor = 1e-4f;      ///< minimum texel importance, relative to the mean (0 disables; < 1)
   /// K: every texel's importance is at least 1/K of the largest radiance (channel average) the map's
@@ -72,10 +83,21 @@ struct Cone {
   float sin_half_angle = 0;
 };
 
+/// The second level of a three-level sample: for each top cell c, a distribution over its S x S
+/// sub-cells (row-major, sub-cell (x, y) of cell c). ImportanceTable::subcells(c) is the environment's.
+class SubcellLevel {
+ public:
+  virtual ~SubcellLevel() = default;
+  /// Cell c's sub-cell distribution, S x S. Only called for cells of positive top-level probability;
+  /// it must be valid() then. The reference may be to scratch that the next call overwrites.
+  virtual const DiscreteDistribution2D& subcells(int c) const = 0;
+};
+
 class ImportanceTable;
 namespace detail {
 struct CellArrays;
 CellArrays cell_arrays(const ImportanceTable& table);  // the SIMD kernels' view (src/kernels.h)
+CellArrays subcell_arrays(const ImportanceTable& table, int c);  // the same for top cell c's sub-cells
 }  // namespace detail
 
 class ImportanceTable {
@@ -86,6 +108,7 @@ class ImportanceTable {
   explicit ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options = {});
 
   int top_resolution() const { return T_; }   ///< T
+  int subdivision() const { return S_; }      ///< S: sub-cells per top cell along one axis
   int cell_resolution() const { return F_; }  ///< F: fine texels per top cell along one axis
   int fine_resolution() const { return N_; }  ///< N = T * F
   int cell_count() const { return T_ * T_; }
@@ -100,15 +123,22 @@ class ImportanceTable {
   /// The u that sample() maps to direction d (up to round-off), e.g. to test stratification.
   Point2 invert(Vec3 d) const { return invert(top_, d); }
 
-  /// Two-level sampling with any top level over this table's T x T cells (the product sampler's,
-  /// a renderer's own): the cell from `top` with u, then a fine texel of that cell with u's remainder.
-  /// The density of a direction d in cell c is top.pmf(c) times the cell's fine density, in solid
-  /// angle (solid_angle_pdf). `top` must be T x T; an invalid `top` or an empty table gives pdf 0.
-  DirectionSample sample(const DiscreteDistribution2D& top, Point2 u) const;
-  float pdf(const DiscreteDistribution2D& top, Vec3 d) const;
-  Point2 invert(const DiscreteDistribution2D& top, Vec3 d) const;
+  /// Sampling with any top level over this table's T x T cells (the product sampler's, a renderer's
+  /// own): the cell from `top` with u, a sub-cell from `sub` (nullptr: the environment's own
+  /// subcells()) with u's remainder, then a fine texel of that sub-cell with what remains. The density
+  /// of a direction d in sub-cell s of cell c is top.pmf(c) sub.pmf(s) times the sub-cell's fine
+  /// density, in solid angle (solid_angle_pdf). `top` must be T x T; an invalid `top` or an empty
+  /// table gives pdf 0.
+  DirectionSample sample(const DiscreteDistribution2D& top, Point2 u, const SubcellLevel* sub = nullptr) const;
+  float pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
+  Point2 invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
   /// The environment's own top level: cell (x, y) has probability E[c], c = y * T + x.
   const DiscreteDistribution2D& top_level() const { return top_; }
+
+  /// The environment's distribution over the S x S sub-cells of top cell c (their shares of E[c]).
+  const DiscreteDistribution2D& subcells(int c) const { return env_sub_[static_cast<std::size_t>(c)]; }
+  /// Bounding cone of sub-cell s (row-major in its cell, 0 <= s < S^2) of top cell c.
+  const Cone& subcell_cone(int c, int s) const { return sub_cones_[static_cast<std::size_t>(c) * S_ * S_ + s]; }
 
   /// Top cell index (y * T + x) that contains equal-area point p / direction d.
   int cell_of(Point2 p) const;
@@ -118,10 +148,11 @@ class ImportanceTable {
   const Cone& cell_cone(int c) const { return cones_[c]; }
   /// Importance of fine texel (x, y), 0 <= x, y < N (equal-area square, y down).
   float importance(int x, int y) const;
-  /// Density of the fine distribution of cell c at equal-area point p, normalized over the cell's area.
+  /// Density of the environment's distribution inside cell c (sub-cell, then fine) at equal-area
+  /// point p, normalized over the cell's area.
   float pdf_in_cell(int c, Point2 p) const;
-  /// Solid-angle density of a direction in a cell of probability cell_pmf whose fine density (over
-  /// the cell's area) is pdf_in_cell: a top cell covers 4 pi / T^2 steradians.
+  /// Solid-angle density of a direction in a cell of probability cell_pmf whose density inside the
+  /// cell (over the cell's area) is pdf_in_cell: a top cell covers 4 pi / T^2 steradians.
   float solid_angle_pdf(float cell_pmf, float pdf_in_cell) const {
     return cell_pmf * pdf_in_cell * float(T_) * float(T_) * kInv4Pi;
   }
@@ -136,17 +167,26 @@ class ImportanceTable {
 
  private:
   friend detail::CellArrays detail::cell_arrays(const ImportanceTable& table);
-  void build_top_level(const std::vector<double>& cell_sums);
+  friend detail::CellArrays detail::subcell_arrays(const ImportanceTable& table, int c);
+  void build_levels(const std::vector<double>& subcell_sums);
   void build_cones();
+  struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell
+    int cell, sub, leaf;
+  };
+  Located locate(Point2 p) const;
 
-  int T_ = 12, F_ = 1, N_ = 12;
+  int T_ = 12, S_ = 1, F_ = 1, N_ = 12;
   bool empty_ = true;
   double integral_ = 0;
   double build_seconds_ = 0;
   std::shared_ptr<const detail::FineLevel> fine_;  // immutable: copies of the table share it
   DiscreteDistribution2D top_;
+  std::vector<DiscreteDistribution2D> env_sub_;  // T^2 of S x S
   std::vector<Cone> cones_;
+  std::vector<Cone> sub_cones_;  // T^2 S^2, cell-major
   std::vector<float> soa_[6];  // cone axis x, y, z, cos, sin, E[c]; padded like top_.values()
+  std::vector<float> sub_soa_[6];  // the same per sub-cell (share of its cell), sub_stride_ per cell
+  int sub_stride_ = 0;
 };
 
 }  // namespace envpis

@@ -18,6 +18,18 @@
 // in a cell the proxy under-rates cannot make product a firefly that mis would not be, within that
 // factor. Cells the proxy does not see (entirely below an opaque surface's horizon) stay at 0.
 //
+// Refinement (options.refine, on a table with sub-cells, S > 1): once a cell is chosen, one of its
+// S x S sub-cells is chosen by the product again, P[s | c] = E[s | c] * proxy(s) with the proxy over
+// the sub-cell's own, tighter cone and E[s | c] its environment share of the cell, floored like the
+// top level (each sub-cell the proxy sees keeps at least r times its share). Then a direction inside
+// the sub-cell from the table's fine distribution. The density of w in sub-cell s of cell c is
+//     p(w) = (P[c] / sum P) * P[s | c] * q_s(w);
+// the sub-cells' weights are computed for the chosen cell only (one vector of S^2 lanes), so the cost
+// per shading point stays O(T^2), plus O(S^2) per sample() and pdf(). Without refine, the sub-cell
+// comes from the environment's shares (the paper's sampler: the same density as with S = 1). With
+// both floors the density wherever the product samples is at least (r / (1 + r))^2 of the
+// environment table's.
+//
 // Optionally a fraction env_mix of the environment-only distribution is mixed into the top level
 // (P'[c] = (1 - m) P[c] / sum P + m E[c]), a defensive mixture against cells the proxy under-rates.
 //
@@ -26,7 +38,8 @@
 // the table is empty (all-black map), it is invalid: sample() returns pdf 0 and pdf() returns 0.
 //
 // Usage: create one ProductSampler per thread (it owns O(T^2) scratch allocated once), then per
-// shading point call prepare() and any number of sample()/pdf(). prepare() does not allocate.
+// shading point call prepare() and any number of sample()/pdf(). Nothing allocates after construction.
+// sample() and pdf() reuse the sampler's scratch too: one sampler must not be used by two threads.
 #pragma once
 
 #include <vector>
@@ -47,10 +60,13 @@ struct ProductSamplerOptions {
   /// r: every cell the proxy sees keeps at least r times its environment share (see above), [0, 1];
   /// 0 is the paper's top level.
   float env_floor = 0.125f;
+  /// Choose the sub-cell by the product too (see above); needs a table with subdivision() > 1.
+  /// false: the paper's one-level product.
+  bool refine = false;
   Simd simd = Simd::Best;  ///< instruction set of the weights kernel (envpis/simd.h)
 };
 
-class ProductSampler {
+class ProductSampler : private SubcellLevel {
  public:
   explicit ProductSampler(const ImportanceTable& table, const ProductSamplerOptions& options = {});
 
@@ -67,6 +83,14 @@ class ProductSampler {
   DirectionSample sample(Point2 u) const;
   /// Density (solid angle) of sample() at direction wi.
   float pdf(Vec3 wi) const;
+  /// The u that sample() maps to direction wi (up to round-off).
+  Point2 invert(Vec3 wi) const;
+
+  /// Whether sample() and pdf() refine inside the cell (options().refine on a table with sub-cells).
+  bool refines() const { return refine_; }
+  /// The current shading point's distribution over the sub-cells of cell c (the environment's shares
+  /// when not refining, or when the proxy sees none of them).
+  const DiscreteDistribution2D& subcells(int c) const override;
 
   /// Normalized top-level probability of cell c for the current shading point.
   float cell_probability(int c) const { return top_.pmf(c); }
@@ -84,6 +108,10 @@ class ProductSampler {
   const detail::Kernels* kernels_;
   PreparedProxy prepared_;
   DiscreteDistribution2D top_;  // P[c], unnormalized (its pmf normalizes)
+  mutable DiscreteDistribution2D sub_;  // P[s | c] of cell sub_cell_ (scratch of subcells())
+  mutable int sub_cell_ = -1;           // -1: sub_ holds no cell's weights for this shading point
+  mutable bool sub_env_ = false;        // sub_cell_'s weights fell back to the environment's
+  bool refine_ = false;
   bool valid_ = false;
   bool fallback_ = false;
 };
