@@ -126,6 +126,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--proxy-max-alpha", proxy_max_alpha,
                  "product: cap on the transformed proxy roughness, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
+  sub.add_option("--subcells", subcells,
+                 "product: S, the sub-cells per top cell along each axis that the product weights again inside "
+                 "the chosen cell (the light tables get S x S sub-cells), 1..8; 1: the paper's one-level product")
+      ->type_name("S")
+      ->capture_default_str();
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -166,6 +171,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!proxy_max_alpha.empty())
     o.product.proxy.max_alpha = static_cast<float>(parse_number_in("--proxy-max-alpha", proxy_max_alpha, 0, 1, "in [0, 1]"));
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
+  o.light_table.subdivision = static_cast<int>(parse_integer("--subcells", subcells, 1, 8));
+  o.product.refine = o.light_table.subdivision > 1;
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for
