@@ -24,6 +24,8 @@ const envpis::EnvironmentMap& studio_map();
 /// sunset.exr resampled (bilinear, through EnvironmentMap::eval_texture) to 4096 x 2048.
 const envpis::EnvironmentMap& sunset_4k_map();
 const envpis::ImportanceTable& sunset_table();
+/// The same map's table with 4 x 4 sub-cells per top cell (the refined product's).
+const envpis::ImportanceTable& sunset_table_subcells();
 
 struct ShadingPoint {
   envpis::Vec3 n, wo;

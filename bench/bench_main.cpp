@@ -53,6 +53,15 @@ const ImportanceTable& sunset_table() {
   return t;
 }
 
+const ImportanceTable& sunset_table_subcells() {
+  static const ImportanceTable t(sunset_map(), [] {
+    ImportanceTableOptions o;
+    o.subdivision = 4;
+    return o;
+  }());
+  return t;
+}
+
 namespace {
 Vec3 uniform_sphere(float u, float v) {
   const float z = 1.0f - 2.0f * u;

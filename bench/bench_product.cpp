@@ -102,6 +102,29 @@ void product_prepare_and_sample(benchmark::State& state, bool simd) {
   state.SetLabel(simd ? to_string(bench_simd()) : "scalar reference");
   table_counters(state, table);
 }
+// The refined product (4 x 4 sub-cells); the argument is ProductSamplerOptions::refine_cells.
+void BM_ProductPrepareAndSample_Refined(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table_subcells();
+  const auto& pts = shading_points();
+  const auto& us = uniform_points();
+  ProductSamplerOptions opt;
+  opt.simd = bench_simd();
+  opt.refine = true;
+  opt.refine_cells = static_cast<int>(state.range(0));
+  ProductSampler ps(table, opt);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const std::size_t j = i++ & kMask;
+    const ShadingPoint& s = pts[j];
+    ps.prepare(s.n, s.wo, s.proxy);
+    const DirectionSample d = ps.sample(us[j]);
+    benchmark::DoNotOptimize(d);
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(to_string(bench_simd()));
+  table_counters(state, table);
+}
+
 void BM_ProductPrepareAndSample_Scalar(benchmark::State& s) { product_prepare_and_sample(s, false); }
 void BM_ProductPrepareAndSample_SIMD(benchmark::State& s) { product_prepare_and_sample(s, true); }
 
@@ -176,6 +199,7 @@ BENCHMARK(BM_ProductWeights_KernelAVX512);
 BENCHMARK(BM_PrepareProxy);
 BENCHMARK(BM_ProductPrepareAndSample_Scalar);
 BENCHMARK(BM_ProductPrepareAndSample_SIMD);
+BENCHMARK(BM_ProductPrepareAndSample_Refined)->ArgName("refine_cells")->Arg(0)->Arg(8)->Arg(144);
 BENCHMARK(BM_ProductSample);
 BENCHMARK(BM_ProductPdf);
 BENCHMARK(BM_EnvSample);

@@ -106,7 +106,9 @@ void FireflyRecorder::add_table_view(const LightSampler& light, FireflyRecord& r
   r.cell_env_probability = table_->cell_probability(r.cell);
   r.pdf_in_cell = table_->pdf_in_cell(r.cell, p);
   // Every table-based strategy's density is (its cell probability) * pdf_in_cell * T^2 / (4 pi), so
-  // the cell probability follows from the light pdf whatever weighted the cells (product, oracle).
+  // the cell probability follows from the light pdf whatever weighted the cells (product, oracle). For
+  // the refined product it is the effective one: the cell's probability times its sub-cell's
+  // probability relative to the environment's share of it.
   const float per_cell = table_->solid_angle_pdf(1.0f, r.pdf_in_cell);
   r.cell_probability = per_cell > 0 ? r.light_pdf / per_cell : 0.0f;
   if (const ProductSampler* ps = light.product_sampler(); ps && ps->valid()) {

@@ -13,11 +13,17 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
     : table_(&table), options_(options), top_(table.top_resolution(), table.top_resolution()) {
   if (!(options.env_mix >= 0.0f && options.env_mix <= 1.0f)) throw Error("env_mix must be in [0, 1]");
   if (!(options.env_floor >= 0.0f && options.env_floor <= 1.0f)) throw Error("env_floor must be in [0, 1]");
+  if (options.refine_cells < 0 || options.refine_cells > 64) throw Error("refine_cells must be in 0..64");
   kernels_ = &detail::kernels_for(options.simd);
   if (options.refine && table.subdivision() < 2)
     throw Error("the refined product sampler needs a table with sub-cells (subdivision > 1)");
   refine_ = options.refine;
-  if (refine_) sub_ = DiscreteDistribution2D(table.subdivision(), table.subdivision());
+  if (refine_) {
+    slots_.assign(static_cast<std::size_t>(options.refine_cells) + 1,
+                  DiscreteDistribution2D(table.subdivision(), table.subdivision()));
+    slot_of_.assign(static_cast<std::size_t>(table.cell_count()), -1);
+    slotted_.reserve(static_cast<std::size_t>(options.refine_cells));
+  }
 }
 
 Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
@@ -25,7 +31,9 @@ Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
 bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   valid_ = false;
   fallback_ = false;
-  sub_cell_ = -1;
+  scratch_cell_ = -1;
+  for (int c : slotted_) slot_of_[c] = -1;
+  slotted_.clear();
   if (table_->empty() || !is_valid_direction(n) || !is_valid_direction(wo)) return false;
   const int cells = table_->cell_count();
   prepared_ = prepare_proxy(proxy, n, wo, options_.proxy);
@@ -35,6 +43,7 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   bool seen = false;
   if (prepared_.valid()) {
     kernels_->product_weights(detail::cell_arrays(*table_), detail::to_lobe_params(prepared_), prob);
+    if (refine_) reestimate_heaviest_cells();
     sum = top_.update();
     seen = top_.valid();
   }
@@ -64,23 +73,58 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   return valid_;
 }
 
+// P[s | c] for cell c into `out`: E[s | c] proxy(s) over the sub-cells' cones, floored like the top
+// level. Returns sum_s E[s | c] proxy(s) before the floor; 0 when the proxy sees none of the
+// sub-cells, and `out` then holds the environment's shares.
+float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
+  const detail::CellArrays cells = detail::subcell_arrays(*table_, c);
+  kernels_->product_weights(cells, detail::to_lobe_params(prepared_), out.values());
+  const float sum = out.update();
+  const int n = table_->subdivision() * table_->subdivision();
+  float* w = out.values();
+  if (!out.valid()) {
+    std::copy(cells.prob, cells.prob + n, w);
+    out.update();
+    return 0.0f;
+  }
+  if (options_.env_floor > 0.0f) {
+    const float a = 1.0f / sum, r = options_.env_floor;
+    for (int s = 0; s < n; ++s)
+      if (w[s] > 0.0f) w[s] = std::max(w[s] * a, r * cells.prob[s]);
+    out.update();
+  }
+  return sum;
+}
+
+// The heaviest cells' P[c] from their sub-cells (ProductSamplerOptions::refine_cells), keeping their
+// sub-cell distributions for sample() and pdf().
+void ProductSampler::reestimate_heaviest_cells() {
+  const int cells = table_->cell_count(), k_max = options_.refine_cells;
+  if (k_max == 0) return;
+  float* prob = top_.values();
+  float peak = 0;
+  for (int c = 0; c < cells; ++c) peak = std::max(peak, prob[c]);
+  const float threshold = 0.25f * peak;
+  if (!(peak > 0) || !std::isfinite(peak)) return;
+  const float* e = table_->top_level().values();
+  for (int c = 0; c < cells && static_cast<int>(slotted_.size()) < k_max; ++c) {
+    if (!(prob[c] >= threshold)) continue;
+    const int slot = static_cast<int>(slotted_.size());
+    slot_of_[c] = slot;
+    slotted_.push_back(c);
+    prob[c] = e[c] * weigh_subcells(c, slots_[slot]);
+  }
+}
+
 const DiscreteDistribution2D& ProductSampler::subcells(int c) const {
   if (!refine_ || fallback_ || !valid_) return table_->subcells(c);
-  if (c != sub_cell_) {
-    sub_cell_ = c;
-    const detail::CellArrays cells = detail::subcell_arrays(*table_, c);
-    kernels_->product_weights(cells, detail::to_lobe_params(prepared_), sub_.values());
-    float sum = sub_.update();
-    sub_env_ = !sub_.valid();  // the cell's cone reaches the proxy, none of its sub-cells' does
-    if (!sub_env_ && options_.env_floor > 0.0f) {  // the floor again, on the cell's shares
-      float* w = sub_.values();
-      const float a = 1.0f / sum, r = options_.env_floor;
-      for (int s = 0; s < table_->subdivision() * table_->subdivision(); ++s)
-        if (w[s] > 0.0f) w[s] = std::max(w[s] * a, r * cells.prob[s]);
-      sub_.update();
-    }
+  if (slot_of_[c] >= 0) return slots_[slot_of_[c]];
+  DiscreteDistribution2D& scratch = slots_.back();
+  if (c != scratch_cell_) {
+    scratch_cell_ = c;
+    weigh_subcells(c, scratch);
   }
-  return sub_env_ ? table_->subcells(c) : sub_;
+  return scratch;
 }
 
 DirectionSample ProductSampler::sample(Point2 u) const {

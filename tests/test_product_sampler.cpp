@@ -459,10 +459,14 @@ TEST(ProductSampler, RefinedChiSquareOverManyConfigurations) {
   const int per_table = 10;
   const int tests = per_table * int(tables.size());
   int k = 0;
+  // Half the configurations re-weigh the heaviest top cells from their sub-cells, half do not.
+  ProductSamplerOptions lazy = refined();
+  lazy.refine_cells = 0;
   for (const auto& [name, table] : tables) {
-    ProductSampler ps(*table, refined());
-    ASSERT_TRUE(ps.refines());
+    ProductSampler heavy_ps(*table, refined()), lazy_ps(*table, lazy);
+    ASSERT_TRUE(heavy_ps.refines() && lazy_ps.refines());
     for (const Config& c : random_configs(per_table, 300 + k)) {
+      ProductSampler& ps = k % 2 ? lazy_ps : heavy_ps;
       ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy)) << name << " " << c.label;
       const auto r = product_chi2(ps, 3000 + k++, tests);
       EXPECT_TRUE(r.passed) << name << " " << c.label << ": " << r.message;
@@ -523,6 +527,14 @@ TEST(ProductSampler, RefinementConcentratesOnANarrowLobe) {
   // The paper's density inside a cell follows the environment only: uniform here.
   const int c = table.cell_of_direction(r);
   EXPECT_NEAR(paper.pdf(r), paper.cell_probability(c) * table.cell_count() * kInv4Pi, 1e-3f * paper.pdf(r));
+  // Re-weighing the heaviest cells from their sub-cells moves probability towards the cell that holds
+  // the lobe's axis, away from neighbours whose cones only graze it; without it (refine_cells 0) the
+  // top level is the paper's.
+  EXPECT_GT(refined_sampler.cell_probability(c), 1.2f * paper.cell_probability(c));
+  two.refine_cells = 0;
+  ProductSampler lazy(table, two);
+  ASSERT_TRUE(lazy.prepare(n, wo, proxy));
+  for (int k = 0; k < table.cell_count(); ++k) ASSERT_EQ(lazy.cell_probability(k), paper.cell_probability(k));
 }
 
 TEST(ProductSampler, RefinedNeedsSubcellsAndDoesNotAllocate) {

@@ -131,6 +131,10 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "the chosen cell (the light tables get S x S sub-cells), 1..8; 1: the paper's one-level product")
       ->type_name("S")
       ->capture_default_str();
+  sub.add_option("--refine-cells", refine_cells,
+                 "product with --subcells > 1: the heaviest top cells (up to this many, 0..64) re-weighed from "
+                 "their sub-cells (default: the library's)")
+      ->type_name("K");
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -173,6 +177,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (!env_mix.empty()) o.product.env_mix = static_cast<float>(parse_number_in("--env-mix", env_mix, 0, 1, "in [0, 1]"));
   o.light_table.subdivision = static_cast<int>(parse_integer("--subcells", subcells, 1, 8));
   o.product.refine = o.light_table.subdivision > 1;
+  if (!refine_cells.empty())
+    o.product.refine_cells = static_cast<int>(parse_integer("--refine-cells", refine_cells, 0, 64));
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for

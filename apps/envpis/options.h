@@ -55,7 +55,7 @@ struct SceneOptionArgs {
   std::string top = "12", fine = "0", subcells = "1";
   std::string peak_ratio;  // empty: the library's default
   std::string oracle_res = "64", oracle_dirs = "4";
-  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor;  // empty: the library's defaults
+  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}

@@ -63,6 +63,10 @@ struct ProductSamplerOptions {
   /// Choose the sub-cell by the product too (see above); needs a table with subdivision() > 1.
   /// false: the paper's one-level product.
   bool refine = false;
+  /// With refine: up to this many of the heaviest top cells (those within a factor 4 of the largest
+  /// P[c]) have P[c] re-estimated from their sub-cells, E[c] * sum_s E[s | c] proxy(s), in prepare(),
+  /// 0..64. The cone of a whole cell overstates the lobe wherever the cell is only partly inside it.
+  int refine_cells = 8;
   Simd simd = Simd::Best;  ///< instruction set of the weights kernel (envpis/simd.h)
 };
 
@@ -108,9 +112,14 @@ class ProductSampler : private SubcellLevel {
   const detail::Kernels* kernels_;
   PreparedProxy prepared_;
   DiscreteDistribution2D top_;  // P[c], unnormalized (its pmf normalizes)
-  mutable DiscreteDistribution2D sub_;  // P[s | c] of cell sub_cell_ (scratch of subcells())
-  mutable int sub_cell_ = -1;           // -1: sub_ holds no cell's weights for this shading point
-  mutable bool sub_env_ = false;        // sub_cell_'s weights fell back to the environment's
+  // Sub-cell distributions: one per cell re-estimated in prepare() (slot_of_[c] >= 0), and a scratch
+  // for any other cell, weighed when sample() or pdf() first needs it.
+  float weigh_subcells(int c, DiscreteDistribution2D& out) const;
+  void reestimate_heaviest_cells();
+  mutable std::vector<DiscreteDistribution2D> slots_;  // refine_cells + 1 (the last: the scratch)
+  std::vector<int> slot_of_;                   // per cell: its slot, or -1
+  std::vector<int> slotted_;                   // the cells holding a slot
+  mutable int scratch_cell_ = -1;
   bool refine_ = false;
   bool valid_ = false;
   bool fallback_ = false;
