@@ -10,7 +10,8 @@
 # the oracle at the renderer's defaults (64x64 cells x 4 BSDF evaluations; it is ~80% of the time).
 # Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD (REBUILD=0: use BUILD as is),
 # STRATEGIES (default mis,mis-comp,product,oracle), SEEDS (renders per strategy; relMSE is their
-# median, default 1) and SAMPLER (sobol or independent; default: the renderer's, sobol).
+# median, default 1), SAMPLER (sobol or independent; default: the renderer's, sobol) and EXTRA (more
+# `envpis compare` options, e.g. EXTRA="--subcells 4" for the refined product).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -24,6 +25,7 @@ MAPS=${MAPS:-/usr/share/blender/datafiles/studiolights/world/*.exr}
 STRATEGIES=${STRATEGIES:-mis,mis-comp,product,oracle}
 SEEDS=${SEEDS:-1}
 SAMPLER=${SAMPLER:-sobol}
+read -r -a EXTRA_ARGS <<<"${EXTRA:-}"
 if [ ! -x "$BUILD/apps/envpis/envpis" ] || [ "${REBUILD:-1}" = 1 ]; then
   cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DENVPIS_BUILD_BENCH=OFF >/dev/null
   cmake --build "$BUILD" -j"$(nproc)" --target envpis_cmd
@@ -38,7 +40,7 @@ for map in $MAPS; do
   "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$map" --integrator direct \
     --strategies "$STRATEGIES" --seeds "$SEEDS" --sampler "$SAMPLER" --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
     --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 4 --no-convergence \
-    --quiet --out "$OUT/$name" | sed 's/^/  /'
+    --quiet --out "$OUT/$name" "${EXTRA_ARGS[@]}" | sed 's/^/  /'
 done
 "$PY" scripts/paper_table.py "$OUT"/*/metrics.json > "$OUT/table.md"
 echo "paper-table: done in $(( $(date +%s) - start )) s; table in $OUT/table.md"

@@ -55,12 +55,15 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy != Strategy::Bsdf) {
     key["peak_ratio"] = base.light_table.peak_ratio;
     key["fine"] = base.light_table.fine_resolution;
+    // Sub-cells round the fine resolution to a multiple of T S (old keys stay valid without them).
+    if (base.light_table.subdivision > 1) key["subcells"] = base.light_table.subdivision;
   }
   if ((strategy == Strategy::Product || strategy == Strategy::Oracle) && !scene.proxy_closed_surfaces())
     key["closed_surfaces"] = false;
   if (strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
                       base.product.proxy.max_alpha, base.product.env_mix, base.product.env_floor};
+  if (strategy == Strategy::Product && base.product.refine) key["refine_cells"] = base.product.refine_cells;
 }
 
 }  // namespace
