@@ -26,6 +26,9 @@ Texture::Texture(int width, int height, std::vector<float> texels)
 
 namespace {
 
+/// The first line of an OpenImageIO error (libpng appends "PNG library error" on a second one).
+std::string first_line(const std::string& s) { return s.substr(0, s.find('\n')); }
+
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
 /// Reads every pixel of an opened image as RGBA floats (grey -> RGB, missing alpha -> 1).
@@ -36,7 +39,7 @@ std::shared_ptr<const Texture> decode(OIIO::ImageInput& in, bool srgb, const std
   const int nc = spec.nchannels;
   std::vector<float> px(std::size_t(spec.width) * spec.height * nc);
   if (!in.read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, px.data()))
-    throw Error(what + ": cannot decode the image: " + in.geterror());
+    throw Error(what + ": cannot decode the image: " + first_line(in.geterror()));
   // Only 8/16-bit integer images carry an sRGB encoding; float images are linear already.
   const bool encoded = srgb && !spec.format.is_floating_point();
   std::vector<float> rgba(std::size_t(spec.width) * spec.height * 4);
@@ -56,7 +59,7 @@ std::shared_ptr<const Texture> decode(OIIO::ImageInput& in, bool srgb, const std
 
 std::shared_ptr<const Texture> Texture::load_file(const std::string& path, bool srgb, const std::string& what) {
   auto in = OIIO::ImageInput::open(path);
-  if (!in) throw Error(what + ": cannot read image '" + path + "': " + OIIO::geterror());
+  if (!in) throw Error(what + ": cannot read image '" + path + "': " + first_line(OIIO::geterror()));
   return decode(*in, srgb, what);
 }
 
@@ -72,7 +75,7 @@ std::shared_ptr<const Texture> Texture::load_memory(const std::vector<std::uint8
   auto in = OIIO::ImageInput::create(ext, false, nullptr, &mem);
   OIIO::ImageSpec spec;
   if (!in || !in->set_ioproxy(&mem) || !in->open("embedded." + ext, spec))
-    throw Error(what + ": cannot decode the embedded " + ext + " image: " + (in ? in->geterror() : OIIO::geterror()));
+    throw Error(what + ": cannot decode the embedded " + ext + " image: " + first_line(in ? in->geterror() : OIIO::geterror()));
   return decode(*in, srgb, what);
 }
 
