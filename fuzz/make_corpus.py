@@ -364,8 +364,15 @@ def gltf_seeds():
             d = d[k]
         d[path[-1]] = value
 
+    # NaN and infinite normals in the file: the loader passes (0, 0, 0), never a non-finite normal.
+    nan_bin = bytearray(bin_data)
+    at = doc["bufferViews"][2]["byteOffset"]
+    nan_bin[at:at + 8] = f32(float("nan"), float("inf"))
+    normal_nan = variant(lambda d: set_path(d["buffers"][0], ["uri"], data_uri("application/octet-stream", bytes(nan_bin))))
+
     return {
         "features.gltf": compact(doc),
+        "normal_nan": normal_nan,
         "features.glb": features_glb,
         # broken: the loader must refuse each with one line
         "glb_truncated": features_glb[:300],

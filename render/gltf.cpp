@@ -266,14 +266,15 @@ void refuse_assimp_crashes(const json& j, const std::string& path) {
     for (std::size_t i = 0; i < j["images"].size(); ++i) {
       const json& im = j["images"][i];
       if (!im.is_object()) continue;
-      std::string type;
-      if (im.contains("mimeType") && im["mimeType"].is_string()) type = im["mimeType"].get<std::string>();
-      if (type.empty() && im.contains("uri") && im["uri"].is_string()) {
+      std::vector<std::string> types;
+      if (im.contains("mimeType") && im["mimeType"].is_string()) types.push_back(im["mimeType"].get<std::string>());
+      if (im.contains("uri") && im["uri"].is_string()) {
         const std::string uri = im["uri"].get<std::string>();
-        if (uri.rfind("data:", 0) == 0) type = uri.substr(5, uri.find_first_of(";,") - 5);
+        if (uri.rfind("data:", 0) == 0) types.push_back(uri.substr(5, uri.find_first_of(";,") - 5));
       }
-      if (!type.empty() && type.find('/') == std::string::npos)
-        fail(path, "image " + std::to_string(i) + " has the MIME type '" + type + "' (expected type/subtype)");
+      for (const std::string& type : types)
+        if (!type.empty() && type.find('/') == std::string::npos)
+          fail(path, "image " + std::to_string(i) + " has the MIME type '" + type + "' (expected type/subtype)");
     }
 }
 
@@ -356,7 +357,9 @@ GltfModel read_gltf(const std::string& path) {
       if (uv && m.uvs.size() < m.positions.size()) m.uvs.resize(m.positions.size(), {0, 0});
       for (unsigned v = 0; v < am->mNumVertices; ++v) {
         m.positions.push_back(y_up_to_z_up(M * am->mVertices[v]));
-        m.normals.push_back(am->HasNormals() ? y_up_to_z_up(N * am->mNormals[v]) : Vec3{0, 0, 0});
+        // A non-finite normal (in the file, or overflowing the node transform) counts as none: (0, 0, 0).
+        const Vec3 n = am->HasNormals() ? y_up_to_z_up(N * am->mNormals[v]) : Vec3{0, 0, 0};
+        m.normals.push_back(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) ? n : Vec3{0, 0, 0});
         if (uv) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
         else if (!m.uvs.empty()) m.uvs.push_back({0, 0});
       }
