@@ -75,6 +75,7 @@ run_target() {  # run_target <target>; returns libFuzzer's status
       python3 fuzz/make_corpus.py --assimp-gltf "$dir/corpus"
       # Seeds up to 160 KB (make_corpus.py's GLTF_MAX_SEED); a dictionary of glTF keys for the JSON.
       args+=(-timeout=20 -max_len=160000 -dict=fuzz/fuzz_gltf.dict)
+      ls "$dir/corpus" | wc -l >"$dir/seeds"
       # Replay: every seed must load or fail cleanly, third-party crashes included.
       if ! TMPDIR="$dir/tmp" ASAN_OPTIONS=${ASAN_OPTIONS:-$asan} "$BUILD/fuzz/$t" -runs=0 -timeout=20 -max_len=160000 \
            -rss_limit_mb=3072 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" "$dir/corpus" >"$BUILD/fuzz-logs/$t.replay.log" 2>&1; then
@@ -132,10 +133,12 @@ report() {  # report <target> <status>
   if [ "$runs" = 0 ]; then
     runs=$({ grep -E '^#[0-9]+: cov' "$log" || true; } | tail -n 1 | sed -E 's/^#([0-9]+):.*/\1/')
   fi
-  local ignored extra=""
+  local ignored extra="" seeds
+  seeds=$(ls "fuzz/corpus/$t" | wc -l)
+  [ -f "$dir/seeds" ] && seeds="$seeds + $(($(cat "$dir/seeds") - seeds)) assimp-testmodels"
   [ "$t" = fuzz_gltf ] && extra=", $third_party crash(es) inside assimp"
   ignored=$(find "$dir/artifacts" -name 'oom-*' -o -name 'timeout-*' | wc -l)
-  echo "fuzz: $t: $runs inputs in ${secs} s, corpus $(ls "fuzz/corpus/$t" | wc -l) seeds -> $(ls "$dir/corpus" | wc -l) inputs, $ignored oom/timeout${extra}, status $status (log: $log)"
+  echo "fuzz: $t: $runs inputs in ${secs} s, corpus $seeds seeds -> $(ls "$dir/corpus" | wc -l) inputs, $ignored oom/timeout${extra}, status $status (log: $log)"
   if [ "$status" != 0 ] || [ -n "$(ls -A "$dir/artifacts")" ]; then
     mkdir -p "$BUILD/fuzz-artifacts/$t"
     cp "$dir/artifacts/"* "$BUILD/fuzz-artifacts/$t/" 2>/dev/null || true
