@@ -1,15 +1,21 @@
 #!/usr/bin/env python3
-"""Regenerates the seed corpora in fuzz/corpus/ (needs oiiotool from openimageio-tools).
+"""Regenerates the seed corpora in fuzz/corpus/ (needs oiiotool from openimageio-tools), or writes the
+glTF seeds taken from Debian's assimp-testmodels into a directory (what scripts/fuzz.sh does at run time).
 
   python3 fuzz/make_corpus.py
+  python3 fuzz/make_corpus.py --assimp-gltf DIR   # ASSIMP_MODELS overrides /usr/share/assimp/models
 
 fuzz_image_load seeds: one selector byte (see fuzz_image_load.cpp) + the bytes of a tiny image file:
 valid EXR (half/float, zip/piz, tiled, 1 and 4 channels, NaN/Inf/negative texels, 1e30 texels) and
 Radiance HDR (flat and run-length encoded) files, plus a few broken ones (truncated, wrong extension,
 garbage header). fuzz_table_product seeds: hand-built byte blobs in the layout of fuzz_table_product.cpp.
-Everything stays far below 100 KB.
+fuzz_gltf seeds: small generated glTF / GLB files (every material feature the loader maps, cameras, a
+mirrored node; broken ones: truncated, wrong version, glTF 1.0, texCoord 1, bad factors...).
+Everything committed stays far below 100 KB; the assimp-testmodels files are third-party and copied
+only into the fuzzing run's temporary corpus.
 """
 import base64
+import json
 import os
 import re
 import shutil
@@ -17,6 +23,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import zlib
 
 ROOT = os.path.dirname(os.path.abspath(__file__))
 CORPUS = os.path.join(ROOT, "corpus")
@@ -161,6 +168,241 @@ def table_seeds():
     }
 
 
+# ---- fuzz_gltf ----
+
+ASSIMP_MODELS = os.environ.get("ASSIMP_MODELS", "/usr/share/assimp/models")
+# Seeds above this size are left out (2CylinderEngine.glb, 1.8 MB; the Draco-compressed engine, whose
+# buffer alone is 155 KB): libFuzzer mutates and re-parses the whole input at every run.
+GLTF_MAX_SEED = 160_000
+IMAGE_MAX = 8192  # inlined images above this size are replaced by a tiny PNG of the same role
+
+
+def png(width, height, rgb):
+    """An 8-bit RGB PNG (rgb: width * height * 3 values), written by hand: no imaging library needed."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    rows = b"".join(b"\0" + bytes(rgb[y * width * 3:(y + 1) * width * 3]) for y in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))
+
+
+def data_uri(mime, data):
+    return f"data:{mime};base64," + base64.b64encode(data).decode()
+
+
+def compact(doc):
+    return json.dumps(doc, separators=(",", ":")).encode()
+
+
+def inline_gltf(path):
+    """A .gltf file with the buffers and images it references inlined as data: URIs (the harness
+    writes the input alone into a directory), or its bytes unchanged when it is not valid JSON.
+    Missing resources stay referenced (MissingBin is missing its .bin on purpose)."""
+    with open(path, "rb") as f:
+        raw = f.read()
+    try:
+        doc = json.loads(raw)
+    except ValueError:
+        return raw
+    if not isinstance(doc, dict):
+        return raw
+    base = os.path.dirname(path)
+    for key, default_mime in (("buffers", "application/octet-stream"), ("images", "image/png")):
+        items = doc.get(key)
+        if not isinstance(items, list):
+            continue
+        for item in items:
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:") or not os.path.isfile(os.path.join(base, uri)):
+                continue
+            with open(os.path.join(base, uri), "rb") as f:
+                data = f.read()
+            mime = default_mime
+            if key == "images":
+                mime = "image/jpeg" if data[:2] == b"\xff\xd8" else "image/png"
+                if len(data) > IMAGE_MAX:
+                    data, mime = png(2, 2, [200, 120, 60, 40, 90, 220, 128, 128, 255, 255, 255, 255]), "image/png"
+            item["uri"] = data_uri(mime, data)
+    return compact(doc)
+
+
+def assimp_gltf_seeds():
+    """Every glTF 2.0 and 1.0 file of assimp-testmodels (valid and deliberately broken), self-contained."""
+    seeds = {}
+    for sub in ("glTF2", "glTF"):
+        top = os.path.join(ASSIMP_MODELS, sub)
+        if not os.path.isdir(top):
+            sys.exit(f"make_corpus: {top} is missing (Debian assimp-testmodels; scripts/install-deps.sh)")
+        for root, _, files in sorted(os.walk(top)):
+            for name in sorted(files):
+                if not name.endswith((".gltf", ".glb")):
+                    continue
+                path = os.path.join(root, name)
+                data = inline_gltf(path) if name.endswith(".gltf") else open(path, "rb").read()
+                if len(data) <= GLTF_MAX_SEED:
+                    seeds["assimp-" + os.path.relpath(path, ASSIMP_MODELS).replace("/", "-")] = data
+    return seeds
+
+
+def glb(doc, bin_chunk):
+    """A GLB container: the JSON chunk (space-padded) and the BIN chunk (zero-padded)."""
+    j = compact(doc)
+    j += b" " * (-len(j) % 4)
+    b = bin_chunk + b"\0" * (-len(bin_chunk) % 4)
+    body = struct.pack("<II", len(j), 0x4E4F534A) + j + struct.pack("<II", len(b), 0x004E4942) + b
+    return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+
+
+def feature_model(embed_images):
+    """A glTF document using every material feature the loader maps, two meshes, two cameras and a
+    mirrored, rotated node; its binary data (returned with it) goes into buffer 0. embed_images:
+    images in buffer views (GLB) instead of data: URIs."""
+    bin_data = b""
+    views, accessors = [], []
+
+    def add(data, count, ctype, kind):
+        nonlocal bin_data
+        bin_data += b"\0" * (-len(bin_data) % 4)
+        views.append({"buffer": 0, "byteOffset": len(bin_data), "byteLength": len(data)})
+        bin_data += data
+        accessors.append({"bufferView": len(views) - 1, "componentType": ctype, "count": count, "type": kind})
+        return len(accessors) - 1
+
+    quad_pos = add(f32(-1, 0, 1, 1, 0, 1, 1, 0, -1, -1, 0, -1), 4, 5126, "VEC3")
+    accessors[quad_pos].update({"min": [-1, 0, -1], "max": [1, 0, 1]})
+    quad_uv = add(f32(0, 1, 1, 1, 1, 0, 0, 0), 4, 5126, "VEC2")
+    quad_nrm = add(f32(0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0), 4, 5126, "VEC3")
+    quad_idx = add(struct.pack("<6H", 0, 1, 2, 0, 2, 3), 6, 5123, "SCALAR")
+    tri_pos = add(f32(0, 0, 0, 1, 0, 0, 0, 1, 0), 3, 5126, "VEC3")
+    accessors[tri_pos].update({"min": [0, 0, 0], "max": [1, 1, 0]})
+    tri_idx = add(bytes([0, 1, 2]), 3, 5121, "SCALAR")
+    images = [png(2, 2, [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255]),  # base colour
+              png(1, 2, [0, 200, 255, 0, 20, 0]),                            # metallic-roughness
+              png(1, 1, [173, 189, 230]),                                      # normal
+              png(1, 1, [255, 128, 0])]                                        # emissive
+    image_json = []
+    for data in images:
+        if embed_images:
+            bin_data += b"\0" * (-len(bin_data) % 4)
+            views.append({"buffer": 0, "byteOffset": len(bin_data), "byteLength": len(data)})
+            bin_data += data
+            image_json.append({"bufferView": len(views) - 1, "mimeType": "image/png"})
+        else:
+            image_json.append({"uri": data_uri("image/png", data)})
+    transform = {"KHR_texture_transform": {"offset": [0.5, 0], "rotation": 0.3, "scale": [2, 2]}}
+    doc = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_materials_clearcoat", "KHR_materials_transmission", "KHR_materials_ior",
+                           "KHR_materials_emissive_strength", "KHR_texture_transform"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3, 4]}],
+        "nodes": [
+            {"children": [1, 2], "translation": [0, 1, 0], "rotation": [0, 0.3826834, 0, 0.9238795]},
+            {"mesh": 0, "scale": [-1, 1, 1]},
+            {"mesh": 1, "matrix": [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 3, 1]},
+            {"camera": 0, "translation": [0, 2, 6]},
+            {"camera": 1, "translation": [0, 0, 9]},
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.6, "aspectRatio": 1.5, "znear": 0.1}},
+                    {"type": "orthographic", "orthographic": {"xmag": 2, "ymag": 1.5, "znear": 0.1, "zfar": 50}}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": quad_pos, "TEXCOORD_0": quad_uv, "NORMAL": quad_nrm},
+                             "indices": quad_idx, "material": 0},
+                            {"attributes": {"POSITION": quad_pos}, "indices": quad_idx, "material": 1}]},
+            {"primitives": [{"attributes": {"POSITION": tri_pos}, "indices": tri_idx, "material": 2},
+                            {"attributes": {"POSITION": tri_pos}, "indices": tri_idx}]},
+        ],
+        "materials": [
+            {"name": "textured", "pbrMetallicRoughness": {
+                "baseColorFactor": [1, 0.9, 0.8, 1], "metallicFactor": 0.5, "roughnessFactor": 0.7,
+                "baseColorTexture": {"index": 0, "extensions": transform},
+                "metallicRoughnessTexture": {"index": 1}},
+             "normalTexture": {"index": 2, "scale": 0.8},
+             "emissiveTexture": {"index": 3}, "emissiveFactor": [0.2, 0.2, 0.2],
+             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3}}},
+            {"name": "coated", "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.3, 0.8, 1], "metallicFactor": 0},
+             "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.1}}},
+            {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 0.05},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                            "KHR_materials_ior": {"ior": 1.45}}},
+        ],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 1}, {"source": 2}, {"source": 3}],
+        "samplers": [{"wrapS": 33648, "wrapT": 33071}, {"wrapS": 10497, "wrapT": 10497}],
+        "images": image_json,
+        "bufferViews": views,
+        "accessors": accessors,
+        "buffers": [{"byteLength": len(bin_data)}],
+    }
+    return doc, bin_data
+
+
+def images_of(doc, i):
+    return base64.b64decode(doc["images"][i]["uri"].split(",", 1)[1])
+
+
+def bad_crc(png_bytes):
+    """The PNG with its IDAT chunk's CRC flipped."""
+    b = bytearray(png_bytes)
+    at = b.index(b"IDAT")
+    b[at + 4 + struct.unpack(">I", b[at - 4:at])[0]] ^= 0x55
+    return bytes(b)
+
+
+def gltf_seeds():
+    doc, bin_data = feature_model(embed_images=False)
+    doc["buffers"][0]["uri"] = data_uri("application/octet-stream", bin_data)
+    gdoc, gbin = feature_model(embed_images=True)
+    features_glb = glb(gdoc, gbin)
+
+    def variant(change):
+        d = json.loads(compact(doc))
+        change(d)
+        return compact(d)
+
+    def set_path(d, path, value):
+        for k in path[:-1]:
+            d = d[k]
+        d[path[-1]] = value
+
+    # NaN and infinite normals in the file: the loader passes (0, 0, 0), never a non-finite normal.
+    nan_bin = bytearray(bin_data)
+    at = doc["bufferViews"][2]["byteOffset"]
+    nan_bin[at:at + 8] = f32(float("nan"), float("inf"))
+    normal_nan = variant(lambda d: set_path(d["buffers"][0], ["uri"], data_uri("application/octet-stream", bytes(nan_bin))))
+
+    return {
+        "features.gltf": compact(doc),
+        "normal_nan": normal_nan,
+        "features.glb": features_glb,
+        # broken: the loader must refuse each with one line
+        "glb_truncated": features_glb[:300],
+        "glb_version_7": features_glb[:4] + struct.pack("<I", 7) + features_glb[8:],
+        "glb_magic_only": b"glTF",
+        "gltf_1_0": variant(lambda d: set_path(d, ["asset", "version"], "1.0")),
+        "json_array": b"[]",
+        "json_truncated": compact(doc)[:200],
+        "texcoord_1": variant(lambda d: set_path(d, ["materials", 0, "normalTexture", "texCoord"], 1)),
+        "roughness_2": variant(lambda d: set_path(d, ["materials", 2, "pbrMetallicRoughness", "roughnessFactor"], 2)),
+        "roughness_1e39": variant(lambda d: set_path(d, ["materials", 1, "pbrMetallicRoughness", "roughnessFactor"], 1e39)),
+        "bad_wrap_mode": variant(lambda d: set_path(d, ["samplers", 0, "wrapS"], 12345)),
+        # libpng reports a bad IDAT checksum on two lines: the loader's error must still be one line.
+        "png_crc_error": variant(lambda d: set_path(d, ["images", 0, "uri"], data_uri("image/png", bad_crc(images_of(d, 0))))),
+        "image_not_png": variant(lambda d: set_path(d, ["images", 1, "uri"], data_uri("image/png", b"not a png"))),
+        "texture_index_9": variant(lambda d: set_path(d, ["materials", 0, "emissiveTexture", "index"], 9)),
+        "image_without_source": variant(lambda d: d["textures"][0].pop("source")),
+        "remote_image": variant(lambda d: set_path(d, ["images", 0, "uri"], "https://example.com/a.png")),
+        "indices_out_of_range": variant(lambda d: set_path(d, ["accessors", 3, "count"], 600)),
+        "vertices_huge_scale": variant(lambda d: set_path(d, ["nodes", 1, "scale"], [-1e39, 1, 1])),
+        # assimp 5.2 dereferences the missing accessor (a null pointer): refused before assimp reads it.
+        "skin_without_inverse_bind_matrices": variant(lambda d: (d.update(skins=[{"joints": [2]}]),
+                                                                 set_path(d, ["nodes", 1, "skin"], 0))),
+        # assimp 5.2 reads address 1 for a MIME type without '/': refused before assimp reads it.
+        "image_mime_without_slash": variant(lambda d: set_path(d, ["images", 0, "uri"],
+                                                               d["images"][0]["uri"].replace("image/png", "image5122"))),
+        "camera_yfov_0": variant(lambda d: set_path(d, ["cameras", 0, "perspective", "yfov"], 0)),
+    }
+
+
 # Inputs that once failed, kept as seeds so that every run replays them first.
 REGRESSIONS = {
     "fuzz_table_product": {
@@ -189,11 +431,20 @@ def write(target, seeds):
 
 
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--assimp-gltf":
+        os.makedirs(sys.argv[2], exist_ok=True)
+        for name, data in assimp_gltf_seeds().items():
+            with open(os.path.join(sys.argv[2], name), "wb") as f:
+                f.write(data)
+        return
+    if len(sys.argv) != 1:
+        sys.exit(__doc__)
     with tempfile.TemporaryDirectory() as tmp:
         write("fuzz_image_load", image_seeds(tmp))
     seeds = table_seeds()
     seeds.update({k: base64.b64decode(v) for k, v in REGRESSIONS["fuzz_table_product"].items()})
     write("fuzz_table_product", seeds)
+    write("fuzz_gltf", gltf_seeds())
     total = sum(os.path.getsize(os.path.join(r, f)) for r, _, fs in os.walk(CORPUS) for f in fs)
     print(f"corpus: {total} bytes")
     if total > 100_000:

@@ -1,5 +1,6 @@
 #include "render/gltf.h"
 
+#include <assimp/BaseImporter.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -28,9 +29,20 @@ SceneMaterial make_pbr_scene_material(std::string name, std::shared_ptr<const Pb
 
 namespace {
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(path + ": " + what); }
+/// One line whatever the message: assimp's and OpenImageIO's may span several (line breaks become "; ").
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  std::string line = path + ": ";
+  for (std::size_t i = 0; i < what.size(); ++i) {
+    if (what[i] != '\n' && what[i] != '\r') line += what[i];
+    else if (i + 1 < what.size() && what[i + 1] != '\n' && what[i + 1] != '\r') line += "; ";
+  }
+  throw Error(line);
+}
 
 std::vector<std::uint8_t> read_bytes(const std::string& path, const std::string& what) {
+  // Regular files only: a URI naming /dev/zero, a FIFO or a directory would read forever, block or fail late.
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw Error(what + ": '" + path + "' is not a readable file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(what + ": cannot open '" + path + "'");
   return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
@@ -96,27 +108,30 @@ struct Document {
       fail(file, std::string("invalid glTF JSON: ") + e.what());
     }
     if (!j.is_object()) fail(file, "the glTF JSON is not an object");
+    // glTF 2.0 only (glTF 1.0 files would otherwise go through assimp's guessing, see keep_only_gltf2).
+    const json* version = j.contains("asset") && j["asset"].is_object() && j["asset"].contains("version")
+                              ? &j["asset"]["version"] : nullptr;
+    if (!version || !version->is_string() || version->get<std::string>().rfind("2.", 0) != 0)
+      fail(file, "not a glTF 2.0 file (asset.version " + (version ? version->dump() : std::string("missing")) + ")");
   }
+
+  // The accessors below throw Error without the file's name: load_gltf adds it (and the material's).
 
   /// Element `index` of the top-level array `key`.
   const json& at(const char* key, const json& index) const {
     if (!index.is_number_unsigned() || !j.contains(key) || !j[key].is_array() || index.get<std::size_t>() >= j[key].size())
-      fail(path, std::string("invalid ") + key + " index");
+      throw Error(std::string("invalid ") + key + " index");
     return j[key][index.get<std::size_t>()];
   }
 
   std::vector<std::uint8_t> uri_bytes(const std::string& uri) const {
     if (uri.rfind("data:", 0) == 0) {
       const std::size_t comma = uri.find(";base64,");
-      if (comma == std::string::npos) fail(path, "a data URI that is not base64");
-      try {
-        return base64_decode(uri, comma + 8);
-      } catch (const Error& e) {
-        fail(path, e.what());
-      }
+      if (comma == std::string::npos) throw Error("a data URI that is not base64");
+      return base64_decode(uri, comma + 8);
     }
-    if (uri.find("://") != std::string::npos) fail(path, "remote URI '" + uri + "' (only local files)");
-    return read_bytes((dir / uri).string(), path);
+    if (uri.find("://") != std::string::npos) throw Error("remote URI '" + uri + "' (only local files)");
+    return read_bytes((dir / uri).string(), "URI '" + uri + "'");
   }
 
   const std::vector<std::uint8_t>& buffer(const json& index) {
@@ -127,17 +142,17 @@ struct Document {
     std::vector<std::uint8_t> data;
     if (b.contains("uri") && b["uri"].is_string()) data = uri_bytes(b["uri"].get<std::string>());
     else if (i == 0) data = glb_bin;
-    else fail(path, "buffer " + std::to_string(i) + " has no data");
+    else throw Error("buffer " + std::to_string(i) + " has no data");
     return buffers.emplace(i, std::move(data)).first->second;
   }
 
   std::vector<std::uint8_t> image_bytes(const json& image) {
     if (image.contains("uri") && image["uri"].is_string()) return uri_bytes(image["uri"].get<std::string>());
-    if (!image.contains("bufferView")) fail(path, "an image without uri or bufferView");
+    if (!image.contains("bufferView")) throw Error("an image without uri or bufferView");
     const json& view = at("bufferViews", image["bufferView"]);
     const std::vector<std::uint8_t>& buf = buffer(view.value("buffer", json()));
     const std::size_t off = view.value("byteOffset", std::size_t(0)), len = view.value("byteLength", std::size_t(0));
-    if (off + len > buf.size() || off + len < off) fail(path, "an image's bufferView runs past its buffer");
+    if (off + len > buf.size() || off + len < off) throw Error("an image's bufferView runs past its buffer");
     return std::vector<std::uint8_t>(buf.begin() + std::ptrdiff_t(off), buf.begin() + std::ptrdiff_t(off + len));
   }
 };
@@ -219,6 +234,50 @@ class MaterialReader {
   std::map<std::pair<std::size_t, bool>, std::shared_ptr<const Texture>> cache_;
 };
 
+/// Leaves the importer with assimp's glTF 2.0 reader only. assimp hands a file that no reader claims
+/// by its extension (or that the claiming readers reject, as the glTF 1.0 reader does with a glTF 2.0
+/// file and vice versa) to the signature check of all of its ~50 readers (OBJ, PLY, X, ...); a .gltf
+/// or .glb file should never reach third-party parsers of other formats.
+void keep_only_gltf2(Assimp::Importer& importer) {
+  std::vector<Assimp::BaseImporter*> others;
+  for (std::size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    const aiImporterDesc* d = importer.GetImporterInfo(i);
+    if (!d || std::strcmp(d->mName, "glTF2 Importer") != 0) others.push_back(importer.GetImporter(i));
+  }
+  for (Assimp::BaseImporter* imp : others) {
+    importer.UnregisterLoader(imp);
+    delete imp;  // unregistered readers are no longer the importer's to delete
+  }
+  if (importer.GetImporterCount() != 1) throw Error("assimp has no glTF 2.0 reader");
+}
+
+/// Files that crash assimp 5.2's glTF 2.0 reader, refused before it sees them (found by fuzz_gltf;
+/// fuzz/README.md lists what is known about assimp and what is guarded here).
+void refuse_assimp_crashes(const json& j, const std::string& path) {
+  // A skin without inverseBindMatrices (optional in glTF: identity matrices) is dereferenced as a null
+  // accessor when a node uses the skin.
+  if (j.contains("skins") && j["skins"].is_array())
+    for (std::size_t i = 0; i < j["skins"].size(); ++i)
+      if (!j["skins"][i].is_object() || !j["skins"][i].contains("inverseBindMatrices"))
+        fail(path, "skin " + std::to_string(i) + " without inverseBindMatrices (not supported)");
+  // An embedded image's MIME type without a '/' ("mimeType" or a data: URI's media type): assimp takes
+  // strchr(type, '/') + 1 as the file extension, address 1 when there is no '/'.
+  if (j.contains("images") && j["images"].is_array())
+    for (std::size_t i = 0; i < j["images"].size(); ++i) {
+      const json& im = j["images"][i];
+      if (!im.is_object()) continue;
+      std::vector<std::string> types;
+      if (im.contains("mimeType") && im["mimeType"].is_string()) types.push_back(im["mimeType"].get<std::string>());
+      if (im.contains("uri") && im["uri"].is_string()) {
+        const std::string uri = im["uri"].get<std::string>();
+        if (uri.rfind("data:", 0) == 0) types.push_back(uri.substr(5, uri.find_first_of(";,") - 5));
+      }
+      for (const std::string& type : types)
+        if (!type.empty() && type.find('/') == std::string::npos)
+          fail(path, "image " + std::to_string(i) + " has the MIME type '" + type + "' (expected type/subtype)");
+    }
+}
+
 /// glTF (+Y up) to the renderer's +Z up.
 Vec3 y_up_to_z_up(aiVector3D v) { return {v.x, -v.z, v.y}; }
 
@@ -230,7 +289,9 @@ GltfModel read_gltf(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path, "no such glTF file");
   Document doc(path);
+  refuse_assimp_crashes(doc.j, path);
   Assimp::Importer importer;
+  keep_only_gltf2(importer);
   const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                          aiProcess_GenSmoothNormals | aiProcess_ValidateDataStructure | aiProcess_FlipUVs;
   const aiScene* sc = importer.ReadFile(path, flags);
@@ -296,7 +357,9 @@ GltfModel read_gltf(const std::string& path) {
       if (uv && m.uvs.size() < m.positions.size()) m.uvs.resize(m.positions.size(), {0, 0});
       for (unsigned v = 0; v < am->mNumVertices; ++v) {
         m.positions.push_back(y_up_to_z_up(M * am->mVertices[v]));
-        m.normals.push_back(am->HasNormals() ? y_up_to_z_up(N * am->mNormals[v]) : Vec3{0, 0, 0});
+        // A non-finite normal (in the file, or overflowing the node transform) counts as none: (0, 0, 0).
+        const Vec3 n = am->HasNormals() ? y_up_to_z_up(N * am->mNormals[v]) : Vec3{0, 0, 0};
+        m.normals.push_back(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) ? n : Vec3{0, 0, 0});
         if (uv) m.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
         else if (!m.uvs.empty()) m.uvs.push_back({0, 0});
       }

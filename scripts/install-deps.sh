@@ -9,7 +9,7 @@ PACKAGES=(
   clang libclang-rt-14-dev
   # libraries (see DESIGN.md section 6)
   libopenimageio-dev openimageio-tools libembree-dev libtbb-dev libhwy-dev
-  libcli11-dev nlohmann-json3-dev libboost-math-dev libassimp-dev
+  libcli11-dev nlohmann-json3-dev libboost-math-dev libassimp-dev libpng-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # real HDR environment maps (CC0): /usr/share/blender/datafiles/studiolights/world/*.exr

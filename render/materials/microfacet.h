@@ -192,7 +192,11 @@ inline float fresnel_schlick(float cos_i, float f0) {
 class AlbedoTable {
  public:
   static constexpr int kSize = 32;  ///< nodes at mu = k / (kSize - 1)
-  static constexpr int kGrid = 32;  ///< kGrid x kGrid normals per node
+#ifndef ENVPIS_ALBEDO_TABLE_GRID
+#define ENVPIS_ALBEDO_TABLE_GRID 32
+#endif
+  /// kGrid x kGrid normals per node (fuzz/CMakeLists.txt lowers it: there the cost matters, not the accuracy)
+  static constexpr int kGrid = ENVPIS_ALBEDO_TABLE_GRID;
 
   AlbedoTable() = default;
 

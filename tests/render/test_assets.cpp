@@ -387,9 +387,36 @@ TEST(Gltf, BrokenFilesFailWithOneCleanLineThroughTheCommand) {
     ASSERT_TRUE(fs::exists(kModels + "/" + f)) << "missing " << kModels << "/" << f << " (Debian assimp-testmodels)";
     files.push_back(kModels + "/" + f);
   }
-  // Generated: a truncated GLB, a GLB with a bad version, garbage, an image that is not one.
   const fs::path dir = fs::temp_directory_path() / ("envpis_test_assets_" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  // fuzz_gltf's finds and guards: a PNG texture with a bad IDAT checksum (libpng's message has two
+  // lines), a glTF 1.0 file (never handed to assimp's other readers), an image URI naming /dev/zero.
+  {
+    fs::create_directories(dir / "crc");
+    for (const char* f : {"BoxTextured.gltf", "BoxTextured0.bin", "CesiumLogoFlat.png"})
+      fs::copy_file(kModels + "/BoxTextured-glTF/" + f, dir / "crc" / f, fs::copy_options::overwrite_existing);
+    std::ifstream in(dir / "crc/CesiumLogoFlat.png", std::ios::binary);
+    std::string png((std::istreambuf_iterator<char>(in)), {});
+    in.close();
+    const std::size_t idat = png.find("IDAT");
+    ASSERT_NE(idat, std::string::npos);
+    const std::size_t len = (std::size_t(std::uint8_t(png[idat - 4])) << 24) | (std::size_t(std::uint8_t(png[idat - 3])) << 16) |
+                            (std::size_t(std::uint8_t(png[idat - 2])) << 8) | std::size_t(std::uint8_t(png[idat - 1]));
+    png[idat + 4 + len] = char(png[idat + 4 + len] ^ 0x55);  // the chunk's CRC
+    std::ofstream(dir / "crc/CesiumLogoFlat.png", std::ios::binary) << png;
+    files.push_back((dir / "crc/BoxTextured.gltf").string());
+    const std::string v1 = kModels + "/../glTF/TwoBoxes/TwoBoxes.gltf";
+    ASSERT_TRUE(fs::exists(v1)) << "missing " << v1 << " (Debian assimp-testmodels)";
+    files.push_back(v1);
+    const fs::path zero = write_test_gltf("devzero", "", {128, 128, 255});
+    std::ifstream zin(zero);
+    std::string text((std::istreambuf_iterator<char>(zin)), {});
+    zin.close();
+    text.replace(text.find("colors.png"), 10, "/dev/zero");
+    std::ofstream(zero) << text;
+    files.push_back(zero.string());
+  }
+  // Generated: a truncated GLB, a GLB with a bad version, garbage, an image that is not one.
   {
     std::ifstream in(kModels + "/BoxTextured-glTF-Binary/BoxTextured.glb", std::ios::binary);
     std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
