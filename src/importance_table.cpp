@@ -71,15 +71,16 @@ float ImportanceTable::importance(int x, int y) const { return fine_->values()[f
 void ImportanceTable::build_levels(const std::vector<double>& subcell_sums) {
   const int cells = T_ * T_, per = S_ * S_, TS = T_ * S_;
   std::vector<double> cell_sums(static_cast<std::size_t>(cells), 0.0);
-  env_sub_.assign(static_cast<std::size_t>(cells), DiscreteDistribution2D(S_, S_));
+  const float one = 1.0f;
+  whole_cell_ = DiscreteDistribution2D(&one, 1, 1);
+  if (S_ > 1) env_sub_.assign(static_cast<std::size_t>(cells), DiscreteDistribution2D(S_, S_));
   for (int c = 0; c < cells; ++c) {
-    float* m = env_sub_[c].values();
     for (int s = 0; s < per; ++s) {
       const double v = subcell_sums[static_cast<std::size_t>(((c / T_) * S_ + s / S_) * TS + (c % T_) * S_ + s % S_)];
       cell_sums[c] += v;
-      m[s] = static_cast<float>(v);
+      if (S_ > 1) env_sub_[c].values()[s] = static_cast<float>(v);
     }
-    env_sub_[c].update();
+    if (S_ > 1) env_sub_[c].update();
   }
   double total = 0;
   for (double v : cell_sums) total += v;
@@ -163,7 +164,7 @@ void store_padding(std::vector<float> (&soa)[6], std::size_t i) {
 void ImportanceTable::build_cones() {
   const int cells = T_ * T_, per = S_ * S_;
   cones_.assign(cells, Cone{});
-  sub_cones_.assign(static_cast<std::size_t>(cells) * per, Cone{});
+  sub_cones_.assign(S_ > 1 ? static_cast<std::size_t>(cells) * per : 0, Cone{});
   detail::parallel_for(0, cells, [&](int begin, int end) {
     for (int c = begin; c < end; ++c) {
       cones_[c] = bounding_cone(T_, c % T_, c / T_);
@@ -172,12 +173,11 @@ void ImportanceTable::build_cones() {
             bounding_cone(T_ * S_, (c % T_) * S_ + s % S_, (c / T_) * S_ + s / S_);
     }
   });
-  if (S_ == 1) sub_cones_ = cones_;
   for (int c = 0; c < cells; ++c) store_cone(soa_, c, cones_[c]);
   for (int c = cells; c < top_.padded_size(); ++c) store_padding(soa_, c);
   for (int c = 0; c < cells && sub_stride_ > 0; ++c) {
     const std::size_t base = static_cast<std::size_t>(c) * sub_stride_;
-    for (int s = 0; s < per; ++s) store_cone(sub_soa_, base + s, sub_cones_[static_cast<std::size_t>(c) * per + s]);
+    for (int s = 0; s < per; ++s) store_cone(sub_soa_, base + s, subcell_cone(c, s));
     for (int s = per; s < sub_stride_; ++s) store_padding(sub_soa_, base + s);
   }
 }
@@ -205,7 +205,7 @@ int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S)
 float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
   const Located at = locate(p);
   if (at.cell != c) return 0.0f;
-  return env_sub_[c].pmf(at.sub) * float(S_ * S_) * fine_->pdf(at.leaf, p);
+  return subcells(c).pmf(at.sub) * float(S_ * S_) * fine_->pdf(at.leaf, p);
 }
 
 DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point2 u, const SubcellLevel* sub) const {
@@ -267,7 +267,8 @@ std::size_t ImportanceTable::bytes_used() const {
   b += (cones_.capacity() + sub_cones_.capacity()) * sizeof(Cone);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
   for (const auto& a : sub_soa_) b += a.capacity() * sizeof(float);
-  b += env_sub_.size() * (sizeof(DiscreteDistribution2D) + sizeof(float) * (env_sub_.empty() ? 0 : env_sub_[0].padded_size() + 2 * S_));
+  if (S_ > 1)
+    b += env_sub_.size() * (sizeof(DiscreteDistribution2D) + sizeof(float) * (env_sub_[0].padded_size() + 2 * S_));
   return b;
 }
 

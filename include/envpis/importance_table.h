@@ -136,9 +136,14 @@ class ImportanceTable {
   const DiscreteDistribution2D& top_level() const { return top_; }
 
   /// The environment's distribution over the S x S sub-cells of top cell c (their shares of E[c]).
-  const DiscreteDistribution2D& subcells(int c) const { return env_sub_[static_cast<std::size_t>(c)]; }
+  /// (S = 1: one sub-cell, the cell itself, of probability 1.)
+  const DiscreteDistribution2D& subcells(int c) const {
+    return S_ > 1 ? env_sub_[static_cast<std::size_t>(c)] : whole_cell_;
+  }
   /// Bounding cone of sub-cell s (row-major in its cell, 0 <= s < S^2) of top cell c.
-  const Cone& subcell_cone(int c, int s) const { return sub_cones_[static_cast<std::size_t>(c) * S_ * S_ + s]; }
+  const Cone& subcell_cone(int c, int s) const {
+    return S_ > 1 ? sub_cones_[static_cast<std::size_t>(c) * S_ * S_ + s] : cones_[static_cast<std::size_t>(c)];
+  }
 
   /// Top cell index (y * T + x) that contains equal-area point p / direction d.
   int cell_of(Point2 p) const;
@@ -181,9 +186,10 @@ class ImportanceTable {
   double build_seconds_ = 0;
   std::shared_ptr<const detail::FineLevel> fine_;  // immutable: copies of the table share it
   DiscreteDistribution2D top_;
-  std::vector<DiscreteDistribution2D> env_sub_;  // T^2 of S x S
+  std::vector<DiscreteDistribution2D> env_sub_;  // T^2 of S x S (empty when S = 1)
+  DiscreteDistribution2D whole_cell_;            // S = 1: the one sub-cell
   std::vector<Cone> cones_;
-  std::vector<Cone> sub_cones_;  // T^2 S^2, cell-major
+  std::vector<Cone> sub_cones_;  // T^2 S^2, cell-major (empty when S = 1)
   std::vector<float> soa_[6];  // cone axis x, y, z, cos, sin, E[c]; padded like top_.values()
   std::vector<float> sub_soa_[6];  // the same per sub-cell (share of its cell), sub_stride_ per cell
   int sub_stride_ = 0;
