@@ -374,7 +374,7 @@ TEST_F(CompareCommand, AnalysisInMetricsAndReport) {
   const fs::path analyze_json = fs::temp_directory_path() / ("envpis-test-analyze-" + pid + ".json");
   std::error_code ec;
   fs::remove_all(out, ec);
-  const std::string options = "--scene fig1 --fine 96 --oracle-res 8 --seed 3";
+  const std::string options = "--scene fig1 --fine 96 --subcells 2 --oracle-res 8 --seed 3";
   const std::vector<CmdResult> r = envpis::test::run_envpis_all(
       {with_report_dir("compare " + options + " --width 32 --height 6 --spp 2 --ref-spp 4 --strategies mis,product "
                        "--analysis-points 1 --repeats 1 --no-convergence --no-plots --no-cache --quiet --out '" +
