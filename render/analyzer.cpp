@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "render/camera.h"
+#include "render/hash.h"
 #include "render/integrator.h"
 
 namespace envpis::render {
@@ -438,25 +439,27 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
 }
 
 
-Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options) : scene_(scene), options_(options) {
+Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const StrategyTableSource& source)
+    : scene_(scene), options_(options) {
   validate(options_);
   const auto t0 = std::chrono::steady_clock::now();
   const EnvironmentMap& env = scene.environment();
+  auto build = [&](Strategy s) {
+    return source ? source(s) : StrategyTables::build(env, s, options_.oracle, options_.product, options_.light_table);
+  };
   // Distribution 0 is the environment table (env, mis, and the limits' fine density); the product
   // shares it, as the renderer's product strategy does.
-  tables_.push_back(StrategyTables::build(env, Strategy::Mis, options_.oracle, options_.product, options_.light_table));
+  tables_.push_back(build(Strategy::Mis));
   auto wants = [&](Strategy s) {
     return std::find(options_.strategies.begin(), options_.strategies.end(), s) != options_.strategies.end();
   };
-  if (wants(Strategy::MisComp))
-    tables_.push_back(StrategyTables::build(env, Strategy::MisComp, options_.oracle, options_.product, options_.light_table));
+  if (wants(Strategy::MisComp)) tables_.push_back(build(Strategy::MisComp));
   if (wants(Strategy::Product)) {
     StrategyTables t = tables_.front();
     t.strategy = Strategy::Product;
     tables_.push_back(std::move(t));
   }
-  if (wants(Strategy::Oracle))
-    tables_.push_back(StrategyTables::build(env, Strategy::Oracle, options_.oracle, options_.product, options_.light_table));
+  if (wants(Strategy::Oracle)) tables_.push_back(build(Strategy::Oracle));
   for (Strategy s : options_.strategies) {
     int k = -1;
     if (s != Strategy::Bsdf) {
@@ -508,6 +511,78 @@ void Analyzer::build_cell_masses() {
     }
     cell_mass_.push_back(std::move(mass));
   }
+}
+
+namespace {
+
+/// Geometric mean over an object's points of one quantity.
+template <class F>
+double object_mean(const ObjectAnalysis& r, F get) {
+  std::vector<double> v;
+  for (const PointAnalysis& p : r.points) v.push_back(get(p));
+  return geometric_mean(v);
+}
+
+void summarize(ObjectAnalysis& r, const AnalyzerOptions& o) {
+  for (std::size_t i = 0; i < o.strategies.size(); ++i) {
+    r.v.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v[i]; }));
+    r.v_light.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v_light[i]; }));
+    double sum = 0;
+    for (const PointAnalysis& p : r.points) sum += p.v[i];
+    r.v_mean.push_back(r.points.empty() ? kNaN : sum / double(r.points.size()));
+  }
+  r.v_product = object_mean(r, [](const PointAnalysis& p) { return p.v_product; });
+  for (std::size_t l = 0; l < o.exact_levels.size(); ++l)
+    r.v_exact.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v_exact[l]; }));
+}
+
+template <class T>
+int index_in(const std::vector<T>& list, T x) {
+  const auto it = std::find(list.begin(), list.end(), x);
+  return it == list.end() ? -1 : static_cast<int>(it - list.begin());
+}
+
+}  // namespace
+
+SceneAnalysis analyze_scene(const Analyzer& analyzer, const Scene& scene, int per_object, std::uint64_t seed) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SceneAnalysis a;
+  a.per_object = per_object;
+  const std::vector<ShadingPointRef> refs = first_hit_points(scene, per_object);
+  std::vector<std::optional<PointAnalysis>> out(refs.size());
+  tbb::parallel_for(std::size_t(0), refs.size(), [&](std::size_t i) {
+    const ShadingPointRef& r = refs[i];
+    out[i] = analyzer.analyze(r.ray, mix64(seed ^ mix64(std::uint64_t(r.pixel_y) * 65536 + r.pixel_x)));
+  });
+  a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (std::size_t i = 0; i < refs.size(); ++i) {  // refs are grouped by object, in id order
+    if (!out[i]) {
+      ++a.skipped;
+      continue;
+    }
+    if (a.objects.empty() || a.objects.back().object != refs[i].object) a.objects.push_back({});
+    ObjectAnalysis& o = a.objects.back();
+    o.object = refs[i].object;
+    o.refs.push_back(refs[i]);
+    a.evaluations += out[i]->evaluations;
+    o.points.push_back(std::move(*out[i]));
+    ++a.analyzed;
+  }
+  for (ObjectAnalysis& o : a.objects) summarize(o, analyzer.options());
+  return a;
+}
+
+Decomposition decompose(const ObjectAnalysis& r, const AnalyzerOptions& o) {
+  const int env = index_in(o.strategies, Strategy::Env), product = index_in(o.strategies, Strategy::Product),
+            mis = index_in(o.strategies, Strategy::Mis);
+  const int lo = index_in(o.exact_levels, 12), hi = index_in(o.exact_levels, 48);
+  auto at = [](const std::vector<double>& v, int i) { return i >= 0 ? v[static_cast<std::size_t>(i)] : kNaN; };
+  Decomposition d;
+  d.env_over_product = at(r.v_light, env) / at(r.v_light, product);
+  d.product_over_exact12 = at(r.v_light, product) / at(r.v_exact, lo);
+  d.exact12_over_exact48 = at(r.v_exact, lo) / at(r.v_exact, hi);
+  d.mis_over_product = at(r.v, mis) / at(r.v, product);
+  return d;
 }
 
 }  // namespace envpis::render

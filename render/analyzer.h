@@ -38,6 +38,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -88,10 +89,14 @@ struct ShadingPointRef {
 /// `per_object` per object, spread evenly over each object's pixels in row-major order (deterministic).
 std::vector<ShadingPointRef> first_hit_points(const Scene& scene, int per_object);
 
+/// A strategy's tables for the scene's environment, built with the analyzer's options.
+using StrategyTableSource = std::function<StrategyTables(Strategy)>;
+
 class Analyzer {
  public:
   /// Builds the strategies' tables for the scene's environment (throws Error for invalid options).
-  Analyzer(const Scene& scene, const AnalyzerOptions& options);
+  /// A caller that already built them with the same options (envpis compare) passes them as `source`.
+  Analyzer(const Scene& scene, const AnalyzerOptions& options, const StrategyTableSource& source = {});
   ~Analyzer();
   Analyzer(const Analyzer&) = delete;
   Analyzer& operator=(const Analyzer&) = delete;
@@ -117,5 +122,40 @@ class Analyzer {
 
 /// Geometric mean of the positive finite values (NaN when there is none).
 double geometric_mean(const std::vector<double>& values);
+
+/// One object's analyzed points and their pooled values, each per options().strategies (v, v_mean,
+/// v_light) or per options().exact_levels (v_exact): geometric means over the points, except v_mean
+/// (the arithmetic mean of v, as relMSE averages pixels). NaN where undefined.
+struct ObjectAnalysis {
+  int object = -1;
+  std::vector<ShadingPointRef> refs;  // the points analyzed, in the order of `points`
+  std::vector<PointAnalysis> points;
+  std::vector<double> v, v_mean, v_light, v_exact;
+  double v_product = 0;
+};
+
+/// The variance decomposition of issue 10 for one object (ratios of its geometric means; NaN when a
+/// strategy or exact level it needs was not analyzed, or a value is undefined).
+struct Decomposition {
+  double env_over_product = 0;      ///< V(env) / V(product), light samples alone: the proxy's gain
+  double product_over_exact12 = 0;  ///< V(product) / V(exact-12), light alone: the cost of the proxy's cell estimates
+  double exact12_over_exact48 = 0;  ///< V(exact-12) / V(exact-48): the cost of the 12 x 12 top level
+  double mis_over_product = 0;      ///< V(mis) / V(product), the renderer's estimators (what compare's relMSE measures)
+};
+
+/// The analysis of a scene's first-hit points (first_hit_points), pooled per object.
+struct SceneAnalysis {
+  std::vector<ObjectAnalysis> objects;  // objects with at least one analyzed point, in id order
+  int per_object = 0;                   // points asked for per object
+  std::size_t analyzed = 0, skipped = 0;  // points analyzed, points with no light (integrand 0)
+  std::size_t evaluations = 0;          // quadrature directions over all points
+  double seconds = 0;                   // wall time of the points' quadrature
+};
+
+/// Analyzes up to `per_object` first-hit points per object in parallel (in the caller's task arena);
+/// a point's oracle jitter is mixed from `seed` and its pixel, so results do not depend on threads.
+SceneAnalysis analyze_scene(const Analyzer& analyzer, const Scene& scene, int per_object, std::uint64_t seed);
+
+Decomposition decompose(const ObjectAnalysis& object, const AnalyzerOptions& options);
 
 }  // namespace envpis::render

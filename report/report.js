@@ -195,6 +195,49 @@
     if (M.equal_time) sec.appendChild(tailTable(M.equal_time, "The tail per object at equal time"));
     root.appendChild(sec);
   }
+  // ------------------------------------------------------------------ exact variance analysis
+  function analysisSection(A) {
+    const sec = el("section", {}, [el("h2", { text: "Exact variance analysis: V of one sample per object (no rendering)" })]);
+    const compared = new Set(M.equal_spp.strategies.map((s) => s.strategy));
+    const extra = A.strategies.filter((s) => !compared.has(s));
+    sec.appendChild(el("p", { class: "note", text:
+      `V = Var / I² of the ${A.heuristic}-heuristic direct estimator's one sample (one light sample plus one BSDF ` +
+      `sample) at a shading point, computed by quadrature over the ${A.grid_resolution}² fine texels of the light ` +
+      `table (envpis analyze, docs/analyzer.md): exact, no Monte Carlo noise, visibility ${A.visibility ? "traced" : "off"}. ` +
+      `Per object: the geometric mean over up to ${A.points_per_object} first hits of camera rays ` +
+      `(${A.points_analyzed} points, ${fmt(A.seconds, 3)} s). relMSE ≈ V / spp up to the pixel footprint and the ` +
+      `sampler's stratification. product*: sampling exactly proportional to BSDF × cos × environment. The ` +
+      `decomposition compares light samples alone (no BSDF sample, no MIS): env / product is what the BSDF proxy gains, ` +
+      `product / exact-12 what its per-cell estimates cost against a perfect 12×12 top level, exact-12 / exact-48 ` +
+      `what the 12×12 resolution costs; mis / product is the ratio of the estimators.` +
+      (extra.length ? ` ${extra.join(" and ")}: analyzed for the decomposition, not compared.` : "") +
+      (M.integrator !== "direct" ? " The analysis models direct lighting at the first hit, not the path integrator." : "") }));
+    if (!A.objects.length) {
+      sec.appendChild(el("p", { class: "warn", text: "No shading point with light to analyze." }));
+      return sec;
+    }
+    const ratios = [["env_light/product_light", "env / product"], ["product_light/exact-12", "product / exact-12"],
+      ["exact-12/exact-48", "exact-12 / exact-48"], ["mis/product", "mis / product"]];
+    const th = (text, attrs) => el("th", Object.assign({ text: text }, attrs || {}));
+    const group = { style: "text-align:center" };
+    const t = el("table", { class: "analysis" }, [
+      el("tr", {}, [th("object", { rowspan: "2" }), th("points", { rowspan: "2" }),
+        th("V of the estimator", Object.assign({ colspan: String(A.strategies.length) }, group)), th("limit", group),
+        th("light samples alone: V ratio", Object.assign({ colspan: "3" }, group)), th("estimator", group)]),
+      el("tr", {}, A.strategies.map((s) => th(s)).concat([th("product*")], ratios.map((r) => th(r[1]))))]);
+    for (const o of A.objects) {
+      const vals = A.strategies.map((s) => o.v[s]);
+      const best = Math.min(...vals.filter((v) => v !== null && v !== undefined));
+      t.appendChild(el("tr", {}, [el("td", { text: regionLabel(o.name) }), el("td", { text: String(o.points) })]
+        .concat(vals.map((v) => el("td", { class: v === best ? "best" : "", text: fmt(v, 3) })),
+          [el("td", { text: fmt(o.v_product_limit, 3) })],
+          ratios.map((r) => el("td", { text: fmt(o.ratios[r[0]], 3) })))));
+    }
+    sec.appendChild(t);
+    return sec;
+  }
+  if (M.analysis) root.appendChild(analysisSection(M.analysis));
+  else if (M.analysis_unavailable) root.appendChild(el("p", { class: "warn", text: "Analysis unavailable: " + M.analysis_unavailable + "." }));
   // ------------------------------------------------------------------ images with linked zoom
   const zoom = { x: W / 2, y: H / 2, side: Math.max(8, Math.round(Math.min(W, H) / 4)), pinned: false };
   // Start on the object where mis has the most error (fig1: usually a mid-roughness sphere).

@@ -2,7 +2,8 @@
 # The main job: installs the Debian packages, builds the envpis command in Release and runs the default
 # comparison: fig1 (eight spheres, GGX roughness 0.02 to 0.5, diffuse, glass) under blender-data's
 # sunset.exr, direct lighting, strategies mis, mis-comp, product and oracle at equal spp and at equal
-# time. Writes OUT/compare/ (override OUT=dir): metrics.json, images/, plots/ and the report index.html.
+# time, and the exact variance analysis at 2 shading points per object (compare's default; about 10-20 s
+# of it). Writes OUT/compare/ (override OUT=dir): metrics.json, images/, plots/ and the report index.html.
 # About 2-3 minutes on 2 free cores including the build; the reference is cached under
 # ~/.cache/envpis/references, so a second run is faster.
 set -euo pipefail

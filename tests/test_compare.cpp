@@ -143,6 +143,10 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --scene nosuchscene" + o, "unknown scene"},
       {"compare --env-orientation legacy" + o, "--env-orientation needs --env"},
       {"compare --env x.exr --env-filter cubic" + o, "--env-filter: unknown map filter 'cubic'"},
+      {"compare --analysis-points 0" + o, "--analysis-points: must be in 1..10000, got '0'"},
+      {"compare --analysis-points many" + o, "--analysis-points: expected an integer in 1..10000, got 'many'"},
+      {"compare --analysis-points 10001" + o, "--analysis-points: must be in 1..10000, got '10001'"},
+      {"compare --no-analysis --analysis-points 2" + o, "--analysis-points cannot be combined with --no-analysis"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
@@ -159,7 +163,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
   const std::string args = "compare --scene fig1 --width 64 --height 12 --spp 4 --ref-spp 64 --strategies mis,product,oracle "
-                           "--oracle-res 8 --oracle-dirs 1 --equal-time auto --repeats 1 --no-plots --quiet "
+                           "--oracle-res 8 --oracle-dirs 1 --equal-time auto --repeats 1 --no-plots --no-analysis --quiet "
                            "--cache-dir '" + cache.string() + "' --out '" + out.string() + "'";
   const CmdResult r = run(args);
   ASSERT_EQ(r.code, 0) << r.output;
@@ -178,6 +182,8 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_FALSE(m["reference"]["cached"].get<bool>());
   EXPECT_TRUE(m["plots"].is_null());
   EXPECT_TRUE(m["plots_unavailable"].is_string());
+  EXPECT_TRUE(m["analysis"].is_null()) << "--no-analysis";
+  EXPECT_FALSE(m.contains("analysis_unavailable"));
   ASSERT_TRUE(m["overhead"].is_object());
   EXPECT_GT(m["overhead"]["ratio"].get<double>(), 0);
   ASSERT_EQ(m["regions"].size(), 8u) << "fig1: one region per sphere";
@@ -290,7 +296,7 @@ TEST_F(CompareCommand, SeedsReportMediansOverIndependentRenders) {
   for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
   // env at 2 spp: the sun's reflections give pixels more than 10x off.
   const std::string common = "compare --scene fig1 --width 64 --height 12 --spp 2 --ref-spp 64 --strategies env,mis "
-                             "--ref-seed 5 --equal-time auto --repeats 1 --no-convergence --no-plots --quiet "
+                             "--ref-seed 5 --equal-time auto --repeats 1 --no-convergence --no-plots --no-analysis --quiet "
                              "--cache-dir '" + cache.string() + "'";
   const CmdResult r = run(common + " --seed 2 --seeds 3 --out '" + out.string() + "'");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -355,6 +361,91 @@ TEST_F(CompareCommand, SeedsReportMediansOverIndependentRenders) {
   }
   EXPECT_GT(tail_pixels, 0) << "env at 2 spp should have pixels more than 10x off: the test does not exercise the count";
   for (const fs::path& d : {out, out1, cache}) fs::remove_all(d, ec);
+}
+
+// The exact variance analysis (on by default): metrics.json's "analysis" has, per object of fig1, V of
+// every compared strategy and of env (added for the decomposition), the limits and the decomposition,
+// all finite, the ratios those of the pooled values, and the numbers are those of `envpis analyze` with
+// the same options (the same tables, points and seed). index.html embeds them. A coarse light table and
+// one point per object keep it to a few seconds.
+TEST_F(CompareCommand, AnalysisInMetricsAndReport) {
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-analysis-" + pid);
+  const fs::path analyze_json = fs::temp_directory_path() / ("envpis-test-analyze-" + pid + ".json");
+  std::error_code ec;
+  fs::remove_all(out, ec);
+  const std::string options = "--scene fig1 --fine 96 --subcells 2 --oracle-res 8 --seed 3";
+  const std::vector<CmdResult> r = envpis::test::run_envpis_all(
+      {with_report_dir("compare " + options + " --width 32 --height 6 --spp 2 --ref-spp 4 --strategies mis,product "
+                       "--analysis-points 1 --repeats 1 --no-convergence --no-plots --no-cache --quiet --out '" +
+                       out.string() + "'"),
+       "analyze " + options + " --points 1 --strategies mis,product,env --json '" + analyze_json.string() + "'"},
+      2);
+  ASSERT_EQ(r[0].code, 0) << r[0].output;
+  ASSERT_EQ(r[1].code, 0) << r[1].output;
+  EXPECT_NE(r[0].output.find("analysis  exact V of one sample at 8 shading points (1 per object)"), std::string::npos)
+      << r[0].output;
+  json m, ref;
+  std::ifstream(out / "metrics.json") >> m;
+  std::ifstream(analyze_json) >> ref;
+  ASSERT_TRUE(m["analysis"].is_object()) << m.dump().substr(0, 2000);
+  const json& a = m["analysis"];
+  EXPECT_EQ(a["strategies"], json({"mis", "product", "env"}));
+  EXPECT_EQ(a["exact_levels"], json({12, 24, 48}));
+  EXPECT_EQ(a["points_per_object"], 1);
+  EXPECT_EQ(a["points_analyzed"], 8);
+  EXPECT_EQ(a["grid_resolution"], 96);
+  EXPECT_EQ(a["heuristic"], "power");
+  EXPECT_GT(a["seconds"].get<double>(), 0);
+  ASSERT_EQ(a["objects"].size(), 8u) << "fig1: eight spheres";
+  ASSERT_EQ(ref["objects"].size(), 8u);
+  auto finite_positive = [](const json& x) { return x.is_number() && std::isfinite(x.get<double>()) && x.get<double>() > 0; };
+  for (std::size_t i = 0; i < 8; ++i) {
+    const json& o = a["objects"][i];
+    const std::string name = o["name"];
+    EXPECT_EQ(o["name"], m["regions"][i]["name"]) << "the analysis' objects are the report's regions";
+    EXPECT_EQ(o["points"], 1) << name;
+    ASSERT_EQ(o["per_point"].size(), 1u) << name;
+    for (const char* s : {"mis", "product", "env"}) {
+      EXPECT_TRUE(finite_positive(o["v"][s])) << name << " v " << s << ": " << o["v"][s];
+      EXPECT_TRUE(finite_positive(o["v_light"][s])) << name << " v_light " << s << ": " << o["v_light"][s];
+      const double v = o["per_point"][0]["v"][s].get<double>();
+      EXPECT_NEAR(o["v"][s].get<double>(), v, 1e-12 * v) << name << ": one point, its V is the object's";
+    }
+    EXPECT_TRUE(o["v_product_limit"].is_number() && o["v_product_limit"].get<double>() >= 0) << name;
+    for (const char* t : {"12", "24", "48"}) EXPECT_TRUE(finite_positive(o["v_exact"][t])) << name << " exact-" << t;
+    const json& q = o["ratios"];
+    auto d = [](const json& x) { return x.get<double>(); };
+    const std::pair<const char*, double> ratios[] = {
+        {"env_light/product_light", d(o["v_light"]["env"]) / d(o["v_light"]["product"])},
+        {"product_light/exact-12", d(o["v_light"]["product"]) / d(o["v_exact"]["12"])},
+        {"exact-12/exact-48", d(o["v_exact"]["12"]) / d(o["v_exact"]["48"])},
+        {"mis/product", d(o["v"]["mis"]) / d(o["v"]["product"])}};
+    for (const auto& [key, want] : ratios) {
+      ASSERT_TRUE(finite_positive(q[key])) << name << " " << key << ": " << q[key];
+      EXPECT_NEAR(d(q[key]), want, 1e-12 * want) << name << " " << key;
+    }
+    // envpis analyze on the same scene, map, options and seed: the same numbers.
+    const json& e = ref["objects"][i];
+    EXPECT_EQ(e["name"], o["name"]);
+    for (const char* s : {"mis", "product", "env"}) {
+      EXPECT_NEAR(d(o["v"][s]), d(e["v"][s]), 1e-9 * d(e["v"][s])) << name << " " << s;
+      EXPECT_NEAR(d(o["v_light"][s]), d(e["v_light"][s]), 1e-9 * d(e["v_light"][s])) << name << " " << s;
+    }
+    EXPECT_NEAR(d(o["v_exact"]["12"]), d(e["v_exact"]["12"]), 1e-9 * d(e["v_exact"]["12"])) << name;
+    EXPECT_EQ(o["per_point"][0]["pixel"], e["per_point"][0]["pixel"]) << name;
+  }
+  // The sharpest lobe gains most from the product over env sampling alone: env / product > 1 there.
+  EXPECT_GT(a["objects"][0]["ratios"]["env_light/product_light"].get<double>(), 1);
+
+  std::ifstream in(out / "index.html");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string html = ss.str();
+  EXPECT_NE(html.find("\"analysis\":{"), std::string::npos) << "index.html does not embed the analysis";
+  EXPECT_NE(html.find("function analysisSection"), std::string::npos) << "report.js without the analysis table";
+  fs::remove_all(out, ec);
+  fs::remove(analyze_json, ec);
 }
 
 }  // namespace

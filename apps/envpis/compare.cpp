@@ -25,7 +25,8 @@
 //
 // The steps, in their files: compare_options (1. options), compare_session (2-3. scene, size, tables,
 // renders), compare_steps (4-8. reference via reference_cache, equal spp, overhead, convergence, equal
-// time), compare_images (9), compare_json (10. metrics.json), report (11. plots and index.html).
+// time), compare_analysis (9. the exact variance analysis, render/analyzer.h), compare_images (10),
+// compare_json (11. metrics.json), report (12. plots and index.html).
 #ifdef ENVPIS_HAVE_RENDER
 
 #include <cstdio>
@@ -36,6 +37,7 @@
 #include <vector>
 
 #include "command.h"
+#include "compare_analysis.h"
 #include "compare_images.h"
 #include "compare_json.h"
 #include "compare_options.h"
@@ -66,7 +68,7 @@ void print_set(const char* title, const MeasuredSet& set) {
   }
 }
 
-// 12. The summary on stdout.
+// 13. The summary on stdout.
 void print_summary(const CompareSession& session, const Comparison& c) {
   if (session.settings.nseeds > 1)
     std::printf("(relMSE, efficiency and the tail: medians over %d seeds)\n", session.settings.nseeds);
@@ -77,13 +79,17 @@ void print_summary(const CompareSession& session, const Comparison& c) {
   if (!c.overhead.is_null())
     std::printf("overhead  time(product)/time(mis) = %.3f (wall), %.3f (CPU)\n", c.overhead["ratio"].get<double>(),
                 c.overhead["ratio_cpu"].is_null() ? 0.0 : c.overhead["ratio_cpu"].get<double>());
+  if (c.analysis.is_object())
+    std::printf("analysis  exact V of one sample at %zu shading points (%d per object): metrics.json \"analysis\", "
+                "the report's table\n",
+                c.analysis["points_analyzed"].get<std::size_t>(), session.settings.analysis_points);
   const fs::path index = session.settings.out / "index.html";
   std::error_code ec;
   const fs::path abs = fs::absolute(index, ec);
   std::printf("report    %s\n", (ec ? index : abs).c_str());
 }
 
-// 10-11. metrics.json, the plots (whose manifest joins metrics.json) and index.html.
+// 11-12. metrics.json, the plots (whose manifest joins metrics.json) and index.html.
 void write_results(const CompareSession& session, const Comparison& c, const std::string& command_line,
                    double exposure) {
   const fs::path out = session.settings.out;
@@ -122,12 +128,14 @@ void run(const CompareArgs& a, const std::string& command_line) {
   measure_overhead(session, c);
   if (!a.no_convergence) measure_convergence(session, c);
   if (settings.equal_time) measure_equal_time(session, c);
-  // 9. Images.
+  // 9. The exact variance analysis.
+  analyze_shading_points(session, c);
+  // 10. Images.
   const double exposure = tonemap_exposure(c.reference);
   write_images(session, c, exposure);
-  // 10-11. metrics.json, plots, report.
+  // 11-12. metrics.json, plots, report.
   write_results(session, c, command_line, exposure);
-  // 12. Summary.
+  // 13. Summary.
   print_summary(session, c);
   progress.line("done");
 }

@@ -212,6 +212,8 @@ json metrics_json(const CompareSession& session, const Comparison& c, const std:
     j["equal_time"] = nullptr;
   j["overhead"] = c.overhead;
   j["convergence"] = c.convergence;
+  j["analysis"] = c.analysis;
+  if (!c.analysis_unavailable.empty()) j["analysis_unavailable"] = c.analysis_unavailable;
   j["error_map"] = error_map_json();
   j["tonemap"] = {{"curve", "1 - exp(-k x), then sRGB"}, {"k", exposure}};
   return j;

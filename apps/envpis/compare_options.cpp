@@ -87,6 +87,16 @@ void parse_firefly_log(const CompareArgs& a, CompareSettings& s) {
   s.firefly_log = a.firefly_log;
 }
 
+void parse_analysis(const CompareArgs& a, CompareSettings& s) {
+  if (a.no_analysis) {
+    if (!a.analysis_points.empty()) throw Error("--analysis-points cannot be combined with --no-analysis");
+    s.analysis_points = 0;
+    return;
+  }
+  if (!a.analysis_points.empty())
+    s.analysis_points = static_cast<int>(parse_integer("--analysis-points", a.analysis_points, 1, kMaxAnalysisPoints));
+}
+
 /// Creates --out and --out/images, and checks that a file can be written there.
 void prepare_out(const std::string& dir) {
   if (dir.empty()) throw Error("--out is required (the output directory)");
@@ -118,6 +128,7 @@ CompareSettings parse_compare_args(const CompareArgs& a) {
     check.spp = s.ref_spp;
     validate(check);
   }
+  parse_analysis(a, s);
   parse_firefly_log(a, s);
   prepare_out(a.out);
   s.out = a.out;
@@ -172,6 +183,11 @@ void add_compare_options(CLI::App& sub, CompareArgs& a) {
   sub.add_flag("--no-cache", a.no_cache, "always render the reference; do not cache it");
   sub.add_flag("--no-convergence", a.no_convergence, "skip the convergence series");
   sub.add_flag("--no-plots", a.no_plots, "do not run report/plots.py");
+  sub.add_option("--analysis-points", a.analysis_points,
+                 "exact variance analysis (docs/analyzer.md): shading points per object, 1.." +
+                     std::to_string(kMaxAnalysisPoints) + " (default " + std::to_string(kAnalysisPoints) + ")")
+      ->type_name("INT");
+  sub.add_flag("--no-analysis", a.no_analysis, "skip the exact variance analysis");
   sub.add_option("--report-dir", a.report_dir, "directory of template.html, report.js, plots.py")->type_name("DIR");
   sub.add_option("--out", a.out, "output directory (metrics.json, images/, index.html)")->type_name("DIR");
   sub.add_option("--firefly-log", a.firefly_log,

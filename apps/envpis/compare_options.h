@@ -21,6 +21,10 @@ constexpr std::uint64_t kRefSeedOffset = 1000003;
 constexpr int kMaxSeeds = 64;
 /// --firefly-factor's default: at 10, one logged sample alone takes its pixel about 10x off.
 constexpr double kFireflyFactor = 10;
+/// --analysis-points' default: shading points per object of the exact variance analysis (about 0.6 s
+/// of CPU each on a 1024 x 512 map; docs/analyzer.md, "In the compare report").
+constexpr int kAnalysisPoints = 2;
+constexpr int kMaxAnalysisPoints = 10000;
 
 struct CompareArgs {
   SceneOptionArgs common{"direct"};
@@ -38,6 +42,8 @@ struct CompareArgs {
   std::string report_dir;
   std::string out;
   std::string firefly_log, firefly_factor;  // empty: no log; the factor's default is kFireflyFactor
+  std::string analysis_points;              // empty: kAnalysisPoints
+  bool no_analysis = false;
   bool no_cache = false;
   bool no_convergence = false;
   bool no_plots = false;
@@ -57,6 +63,7 @@ struct CompareSettings {
   double equal_time_seconds = 0; // the budget when given
   std::string firefly_log;       // the log's directory, created; empty: no log
   double firefly_factor = kFireflyFactor;
+  int analysis_points = kAnalysisPoints;  // shading points per object of the analysis; 0: no analysis
   std::filesystem::path out;     // created, with out/images
   std::string report_dir;        // template.html, report.js, plots.py; empty when not found
 };

@@ -23,6 +23,8 @@ struct Comparison {
   double budget = 0;                  // seconds of sampling per strategy at equal time
   nlohmann::json overhead = nullptr;  // product against mis at equal spp; null without both
   nlohmann::json convergence = nlohmann::json::object();
+  nlohmann::json analysis = nullptr;  // the exact variance analysis (compare_analysis.h); null when off
+  std::string analysis_unavailable;   // why there is none, when it was asked for
 };
 
 /// Step 4: the reference, from the cache or rendered (and then cached).

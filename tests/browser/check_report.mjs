@@ -10,6 +10,8 @@
 //   - the summary tables show the tail (max rel. sq. err., pixels > 10x off) next to relMSE, with the
 //     median over seeds and its [min, max] spread when metrics.json has several seeds, and the per-object
 //     tail tables have a row per object.
+//   - when metrics.json has an "analysis", its table shows a row per analyzed object with a number in
+//     every V cell (one per analyzed strategy, and product*) and in every decomposition column.
 //
 //   node tests/browser/check_report.mjs DIR [--screenshot FILE] [--allow-no-plots]
 //
@@ -135,6 +137,29 @@ try {
   const tailRows = await page.evaluate(() => Array.from(document.querySelectorAll("table.tail")).map((t) => t.rows.length));
   if ((metrics.regions || []).length && (tailRows.length !== blocks.length || tailRows.some((n) => n !== metrics.regions.length + 2)))
     fail(`expected ${blocks.length} per-object tail tables of ${metrics.regions.length} objects, found rows ${JSON.stringify(tailRows)}`);
+
+  // The exact variance analysis: one row per object (after the two header rows), a number in every cell
+  // of the strategies, product* and the decomposition (a ratio may be "\u2013" only when its value is null).
+  if (metrics.analysis) {
+    const A = metrics.analysis;
+    const rows = await page.evaluate(() => Array.from(document.querySelectorAll("table.analysis tr")).map((r) =>
+      Array.from(r.children).map((c) => c.textContent)));
+    if (rows.length !== A.objects.length + 2) fail(`analysis table: ${rows.length - 2} rows for ${A.objects.length} objects`);
+    const head = rows[1] || [];
+    const columns = A.strategies.concat(["product*", "env / product", "product / exact-12", "exact-12 / exact-48", "mis / product"]);
+    if (JSON.stringify(head) !== JSON.stringify(columns)) fail(`analysis table columns ${JSON.stringify(head)}, expected ${JSON.stringify(columns)}`);
+    const keys = ["env_light/product_light", "product_light/exact-12", "exact-12/exact-48", "mis/product"];
+    A.objects.forEach((o, i) => {
+      const cells = (rows[i + 2] || []).slice(2);
+      const values = A.strategies.map((s) => o.v[s]).concat([o.v_product_limit], keys.map((k) => o.ratios[k]));
+      cells.forEach((c, j) => {
+        if (values[j] === null ? c !== "\u2013" : !/^[0-9]/.test(c)) fail(`analysis table, ${o.name}, column ${columns[j]}: '${c}'`);
+      });
+      if (cells.length !== columns.length) fail(`analysis table, ${o.name}: ${cells.length} cells for ${columns.length} columns`);
+    });
+  } else if (!metrics.analysis_unavailable && !("analysis" in metrics)) {
+    fail("metrics.json has no \"analysis\" key");
+  }
 
   if (screenshot) await page.screenshot({ path: screenshot, fullPage: true });
   console.log(`check_report: ${imgs.length} images, ${figures.length} plots, ${expected.length} expected images checked`);

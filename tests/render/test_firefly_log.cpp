@@ -249,7 +249,7 @@ TEST(FireflyLogCommand, RenderAndCompareWriteCsvAndRejectBadValues) {
   TempDir dir;
   const std::string out = (dir.path / "o.exr").string(), csv = (dir.path / "f.csv").string();
   const std::string small = "--scene fig1 --width 32 --height 8 --spp 4 --integrator direct ";
-  const std::string compare = small + "--ref-spp 8 --repeats 1 --no-cache --no-plots --no-convergence --quiet "
+  const std::string compare = small + "--ref-spp 8 --repeats 1 --no-cache --no-plots --no-convergence --no-analysis --quiet "
                                       "--strategies mis --out " + (dir.path / "cmp").string() + " ";
   const std::vector<std::pair<std::string, std::string>> bad{
       {"render " + small + "--out " + out + " --firefly-log " + csv, "--firefly-log needs --firefly-threshold"},
