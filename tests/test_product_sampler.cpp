@@ -460,10 +460,11 @@ TEST(ProductSampler, RefinedChiSquareOverManyConfigurations) {
   const int tests = per_table * int(tables.size());
   int k = 0;
   // Half the configurations re-weigh the heaviest top cells from their sub-cells, half do not.
-  ProductSamplerOptions lazy = refined();
+  ProductSamplerOptions heavy = refined(), lazy = refined();
+  heavy.refine_cells = 8;
   lazy.refine_cells = 0;
   for (const auto& [name, table] : tables) {
-    ProductSampler heavy_ps(*table, refined()), lazy_ps(*table, lazy);
+    ProductSampler heavy_ps(*table, heavy), lazy_ps(*table, lazy);
     ASSERT_TRUE(heavy_ps.refines() && lazy_ps.refines());
     for (const Config& c : random_configs(per_table, 300 + k)) {
       ProductSampler& ps = k % 2 ? lazy_ps : heavy_ps;
@@ -514,6 +515,7 @@ TEST(ProductSampler, RefinementConcentratesOnANarrowLobe) {
   const ImportanceTable table(synthetic_latlong(64, 32, [](int, int) { return 1.0f; }), o);
   ProductSamplerOptions one = refined(), two = refined();
   one.refine = false;
+  two.refine_cells = 8;
   one.proxy.min_alpha = two.proxy.min_alpha = 0.0f;  // the lobe as narrow as the BSDF's
   ProductSampler paper(table, one), refined_sampler(table, two);
   EXPECT_FALSE(paper.refines());
@@ -568,6 +570,7 @@ TEST(ProductSampler, RefinedFloorBoundsTheDensityByTheEnvironments) {
     for (float r : {ProductSamplerOptions{}.env_floor, 0.0f}) {
       ProductSamplerOptions o = refined();
       o.env_floor = r;
+      o.refine_cells = r > 0 ? 8 : 0;  // both ways of weighing sub-cells, each bounded
       ProductSampler ps(*table, o);
       std::mt19937_64 rng(22);
       double worst = HUGE_VAL;

@@ -133,7 +133,7 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--refine-cells", refine_cells,
                  "product with --subcells > 1: the heaviest top cells (up to this many, 0..64) re-weighed from "
-                 "their sub-cells (default: the library's)")
+                 "their sub-cells in prepare (default: the library's, 0)")
       ->type_name("K");
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "

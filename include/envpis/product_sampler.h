@@ -65,8 +65,10 @@ struct ProductSamplerOptions {
   bool refine = false;
   /// With refine: up to this many of the heaviest top cells (those within a factor 4 of the largest
   /// P[c]) have P[c] re-estimated from their sub-cells, E[c] * sum_s E[s | c] proxy(s), in prepare(),
-  /// 0..64. The cone of a whole cell overstates the lobe wherever the cell is only partly inside it.
-  int refine_cells = 8;
+  /// 0..64. It helps the light sample alone everywhere, but under MIS only rough lobes: the cells left
+  /// out keep the whole cell's looser estimate and take samples from the re-estimated ones
+  /// (docs/refinement.md). 0: only the chosen cell's sub-cells are weighed, when sampled.
+  int refine_cells = 0;
   Simd simd = Simd::Best;  ///< instruction set of the weights kernel (envpis/simd.h)
 };
 
