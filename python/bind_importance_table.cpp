@@ -13,9 +13,10 @@ using envpis::ImportanceTable;
 using envpis::ImportanceTableOptions;
 
 ImportanceTable make_table(const envpis::EnvironmentMap& map, int top_resolution, int fine_resolution,
-                           float floor, float peak_ratio, bool compensated) {
+                           float floor, float peak_ratio, bool compensated, int subdivision) {
   ImportanceTableOptions o;
   o.top_resolution = top_resolution;
+  o.subdivision = subdivision;
   o.fine_resolution = fine_resolution;
   o.floor = floor;
   o.peak_ratio = peak_ratio;
@@ -52,7 +53,9 @@ void bind_importance_table(py::module_& m) {
       .def(py::init(&make_table), py::arg("map"), py::arg("top_resolution") = d.top_resolution,
            py::arg("fine_resolution") = d.fine_resolution, py::arg("floor") = d.floor,
            py::arg("peak_ratio") = d.peak_ratio, py::arg("compensated") = d.compensated,
-           "fine_resolution 0: derived from the map's texel count. envpis.Error for invalid options.")
+           py::arg("subdivision") = d.subdivision,
+           "fine_resolution 0: derived from the map's texel count; subdivision: S x S sub-cells per top "
+           "cell (a refined ProductSampler needs S > 1). envpis.Error for invalid options.")
       .def(
           "sample",
           [](const ImportanceTable& t, py::handle u) {
@@ -72,6 +75,7 @@ void bind_importance_table(py::module_& m) {
       .def_property_readonly("top_resolution", &ImportanceTable::top_resolution)
       .def_property_readonly("fine_resolution", &ImportanceTable::fine_resolution)
       .def_property_readonly("cell_resolution", &ImportanceTable::cell_resolution)
+      .def_property_readonly("subdivision", &ImportanceTable::subdivision)
       .def_property_readonly("cell_count", &ImportanceTable::cell_count)
       .def_property_readonly("empty", &ImportanceTable::empty)
       .def_property_readonly("integral", &ImportanceTable::integral)

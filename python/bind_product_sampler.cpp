@@ -48,6 +48,10 @@ void bind_product_sampler(py::module_& m) {
                      "fraction of the environment-only distribution mixed in, [0, 1]")
       .def_readwrite("env_floor", &ProductSamplerOptions::env_floor,
                      "every cell the proxy sees keeps at least this times its environment share, [0, 1]")
+      .def_readwrite("refine", &ProductSamplerOptions::refine,
+                     "choose the sub-cell by the product too (needs a table with subdivision > 1)")
+      .def_readwrite("refine_cells", &ProductSamplerOptions::refine_cells,
+                     "with refine: the heaviest top cells re-weighed from their sub-cells in prepare(), 0..64")
       .def_property(
           "simd", [](const ProductSamplerOptions& o) { return std::string(envpis::to_string(o.simd)); },
           [](ProductSamplerOptions& o, const std::string& name) { o.simd = envpis::parse_simd(name); },
@@ -72,6 +76,7 @@ void bind_product_sampler(py::module_& m) {
       .def("cell_probabilities", &cell_probabilities,
            "The prepared top-level distribution, T x T (sums to 1; zeros when not valid).")
       .def_property_readonly("valid", &ProductSampler::valid)
+      .def_property_readonly("refines", &ProductSampler::refines)
       .def_property_readonly("uses_environment_fallback", &ProductSampler::uses_environment_fallback)
       .def_property_readonly("options", &ProductSampler::options);
 }

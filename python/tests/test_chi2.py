@@ -74,3 +74,24 @@ def test_chi2_detects_a_wrong_pdf(table):
     dirs, _ = sampler.sample(u)
     p, _, _ = chi2_test(observed_counts(dirs, RES), expected_counts(table.pdf, COUNT, RES, 4))
     assert p < 1e-6
+
+
+@pytest.mark.parametrize("name", ["glossy", "glass"])
+def test_refined_product_sampler_chi2(name, latlong_map):
+    """The refined sampler (sub-cells chosen by the product too) through the bindings."""
+    table = envpis.ImportanceTable(latlong_map, subdivision=4)
+    assert table.subdivision == 4 and table.fine_resolution % RES == 0
+    options = envpis.ProductSamplerOptions()
+    options.refine = True
+    sampler = envpis.ProductSampler(table, options)
+    assert sampler.refines
+    n, wo, b = SHADING_POINTS[name]
+    assert sampler.prepare(n, wo, b)
+    check(sampler.sample, sampler.pdf, seed=20 + len(name))
+
+
+def test_refined_product_sampler_needs_subcells(table):
+    options = envpis.ProductSamplerOptions()
+    options.refine = True
+    with pytest.raises(RuntimeError, match="sub-cells"):
+        envpis.ProductSampler(table, options)
