@@ -16,7 +16,10 @@ constexpr double kFloor = 1e-3;
 // With MIS compensation, a cell keeps at least this fraction of its estimated share.
 constexpr double kKeep = 0.25;
 // Points per side with which a fine texel's mean radiance is computed.
-constexpr int kTexelSide = 4;
+constexpr int kTexelSide = 2;
+// First-pass points per side in a cell that straddles the surface's horizon (when directions below it
+// count nothing): its brightest texels may lie below, and a point there tells nothing of the rest.
+constexpr int kHorizonSide = 4;
 // At most this many points per side in one cell's refinement.
 constexpr int kMaxRefineSide = 32;
 
@@ -126,11 +129,16 @@ void OracleSampler::prepare(const ShadingContext& sc) {
   // Cells a light sample can use: positive environment importance, and (when skipping below) a cone
   // not entirely below the surface (angle(axis, n) >= 90 deg + half-angle <=> cos <= -sin(half-angle)).
   active_.clear();
+  horizon_.clear();
   for (int c = 0; c < cells; ++c) {
     if (!(t.cell_probability(c) > 0)) continue;
     if (skip_below) {
       const Cone& cone = t.cell_cone(c);
-      if (dot(cone.axis, sc.n) <= -cone.sin_half_angle) continue;
+      const float cos_axis = dot(cone.axis, sc.n);
+      if (cos_axis <= -cone.sin_half_angle) continue;
+      horizon_.push_back(cos_axis < cone.sin_half_angle);
+    } else {
+      horizon_.push_back(false);
     }
     active_.push_back(c);
   }
@@ -157,7 +165,8 @@ void OracleSampler::prepare(const ShadingContext& sc) {
     }
   // First pass: a few points in every cell; then more where the first estimate puts the integral.
   const int k0 = static_cast<int>(std::lround(std::sqrt(double(options_.directions))));
-  for (int c : active_) light_points(sc, c, k0, 0);
+  for (std::size_t a = 0; a < active_.size(); ++a)
+    light_points(sc, active_[a], horizon_[a] ? std::max(k0, kHorizonSide) : k0, 0);
   estimate();
   double total = 0;
   for (int c : active_) total += cell_sum_[static_cast<std::size_t>(c)];

@@ -79,6 +79,7 @@ class OracleSampler {
   std::vector<Point> points_;     // every evaluated direction of this shading point
   std::vector<int> count_;        // per cell: points drawn from its fine distribution
   std::vector<int> active_;       // cells a light sample can use
+  std::vector<bool> horizon_;     // per active cell: it straddles the horizon of a surface seen from above only
   std::vector<double> cell_sum_;  // per cell: the estimate of integral over the cell of g
   std::vector<double> bsdf_mass_;  // per cell: the estimate of the BSDF sample's probability to land in it
   std::vector<double> weight_;     // per cell: its weight before normalization and the floor

@@ -111,7 +111,7 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "(K; 0: off; default: the library's)")
       ->type_name("K");
   sub.add_option("--oracle-res", oracle_res, "oracle: top cells per side, 1..256")->type_name("INT")->capture_default_str();
-  sub.add_option("--oracle-dirs", oracle_dirs, "oracle: first-pass points per top cell (a square number; docs/sampling.md)")
+  sub.add_option("--oracle-dirs", oracle_dirs, "oracle: first-pass points per top cell (a square number; docs/analyzer.md)")
       ->type_name("INT")
       ->capture_default_str();
   sub.add_option("--oracle-compensation", oracle_compensation,

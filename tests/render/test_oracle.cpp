@@ -113,7 +113,7 @@ TEST(Oracle, PdfIsTheDensityOfItsSamples) {
 // The limit, by the analyzer: V(oracle) <= V(product) at every point for the medium and broad lobes,
 // the diffuse and the glass sphere. It fails with mis_compensation off: the share alone loses to the
 // product under MIS at 3 of the 4 points at alpha 0.1 (by 1.1-1.8x) and at 2 at alpha 0.3. Not at alpha 0.02, where the product's
-// estimator is 2-4x better on this map (docs/sampling.md, "The oracle"); there the share alone is
+// estimator is 2-4x better on this map (docs/analyzer.md, "The oracle"); there the share alone is
 // checked against the exact 48 x 48 top level it estimates (light sample alone, within 10%).
 TEST(Oracle, IsALimitOfTheProductSampler) {
   for (const Case& c : cases()) {
