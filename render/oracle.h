@@ -1,22 +1,31 @@
-// The oracle light distribution: a per-shading-point two-level distribution whose top cells are
-// weighted by an estimate of their true share of the integrand (BSDF x |cos| x environment radiance,
-// channel average), and whose samples inside a cell follow the environment table's own fine density.
-// It is the paper's two-level scheme with a (nearly) perfect top level: the limit the product
-// sampler's top level approaches, measured by the analyzer's exact-T (docs/analyzer.md).
+// The oracle light distribution: a per-shading-point top level over the cells of a fine light table
+// (48 x 48 by default), each weighted from an estimate of its true share of the integrand
+// g = BSDF x |cos| x radiance (channel average), and inside the chosen cell the table's own fine
+// density. It is the paper's two-level scheme with a (nearly) perfect top level: the analyzer's
+// exact-T limit (docs/analyzer.md), made usable in a renderer, and the limit the product sampler's
+// top level is measured against (docs/analyzer.md, "The oracle").
 //
-// Why the estimate is what it is: the share of a cell, integral over the cell of g = f |cos| L, is
-// estimated per shading point by two techniques combined with the balance heuristic:
-//   - points drawn from the cell's own fine distribution (the table's texel importance inside it),
-//     which find a bright source anywhere inside the cell, and
-//   - BSDF-sampled directions, which find a narrow lobe wherever it lies (a fixed number of
-//     evaluations per cell misses a lobe narrower than the cell).
-// A first pass gives every cell a few points; a second gives further points to the cells in
-// proportion to their first estimate (the lobe's peak, a sun), so the cells that matter are known
-// to a few percent. Every point is unbiased for its cell's integral, so the weights are noisy but
-// never systematically wrong, and any positive weights give an unbiased light estimator: pdf() is
-// exactly the density sample() draws from. Cells whose estimate is 0 although the environment
-// is bright there and the surface can see them keep a small floor (a fraction of their
-// environment share), so no direction with radiance depends on BSDF samples alone.
+// The share of a cell, the integral of g over it, is estimated per shading point by two techniques
+// combined with the balance heuristic:
+//   - points drawn from the cell's radiance distribution (each fine texel's mean radiance, computed
+//     once per map), so g / density varies only as the BSDF does: a small sun inside a cell costs
+//     nothing (drawing from the table's importance instead failed there: near a small source the
+//     table raises texels to 1/K of its peak, and most such texels see only sky);
+//   - BSDF-sampled directions, which find a lobe narrower than a cell wherever it lies (a fixed
+//     number of evaluations per cell misses it).
+// A first pass gives every cell one point (16 to a cell that straddles the horizon of a surface seen
+// from above only: its brightest texels may lie below and say nothing of the rest); a second gives
+// further points to the cells in proportion to their first estimate (the lobe's peak, a sun).
+//
+// The weights: the estimated share alone (mis_compensation off) makes the best light sample, but
+// next to a BSDF sample combined by MIS the light sample should go where the BSDF sample does not:
+// one light and one BSDF sample have least variance under the balance heuristic when their
+// densities sum to a multiple of g, so each cell gets max(share / 4, 2 share - P_bsdf(cell)), with
+// P_bsdf(cell) estimated by the same points (the compensation of Karlik et al. 2019, per cell).
+//
+// Unbiased whatever the estimates: pdf() is exactly the density sample() draws from (the table's
+// two levels with this top level), and every cell a light sample can use keeps at least 1e-3 of its
+// environment share, so no direction with radiance depends on BSDF samples alone.
 #pragma once
 
 #include <cstdint>

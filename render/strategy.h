@@ -38,8 +38,8 @@ enum class Heuristic { Power, Balance };
 Heuristic parse_heuristic(const std::string& s);  ///< "power" | "balance"
 const char* to_string(Heuristic h);
 
-/// The oracle's cost per shading point is about bsdf_samples + directions * (active cells) +
-/// refine_points evaluations of the BSDF and the environment (render/oracle.h).
+/// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
+/// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).
 struct OracleOptions {
   int resolution = 48;        ///< top-level cells per side of the oracle's table (1..256)
   int directions = 1;         ///< first-pass points per cell: a square number (1, 4, 9, ..., 256)
@@ -60,7 +60,7 @@ struct StrategyTables {
   /// the compensated one for mis-comp, the oracle's finer table for oracle.
   std::shared_ptr<const ImportanceTable> table;
   OracleOptions oracle;
-  /// The oracle's per-cell distributions and a copy of the map (null for the other strategies).
+  /// The oracle's per-cell radiance distributions (null for the other strategies).
   std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
   double build_seconds = 0;
@@ -84,7 +84,7 @@ struct ShadingContext {
   const Material* bsdf = nullptr;
   std::uint64_t jitter = 0;  ///< random bits for strategies that randomize their set-up (oracle)
   /// True when the material reflects only (f = 0 below the surface): the oracle then skips the cells
-  /// whose cone lies entirely below the surface and counts no radiance from below.
+  /// whose cone lies entirely below the surface and counts nothing from below in its cell weights.
   bool opaque = false;
   /// Cosine between a normal-mapped shading normal and the geometric normal; below 1 the product
   /// strategy widens its proxy's roughness by that angle (envpis::widen_roughness): its proxy lobes
