@@ -8,9 +8,10 @@
 //   mis-comp  a compensated ImportanceTable (Karlik et al. 2019: max(0, importance - mean)) + BSDF
 //             sampling, MIS (pbrt-v4's default: a stronger baseline).
 //   product   the library's ProductSampler (environment x BSDF proxy) + BSDF sampling, MIS.
-//   oracle    a per-shading-point product of the environment and the TRUE BSDF * |cos| over the
-//             top cells of a finer table (64 x 64 by default), then the table's fine distribution
-//             inside the chosen cell; + BSDF sampling, MIS. Slow: the limit the method approaches.
+//   oracle    a per-shading-point top level over the cells of a finer table (48 x 48 by default)
+//             weighted by each cell's estimated true share of BSDF * |cos| * radiance, then the
+//             table's fine distribution inside the chosen cell; + BSDF sampling, MIS
+//             (render/oracle.h). Slow: the limit the paper's two-level method approaches.
 //
 // Tables (StrategyTables) are built once per environment and strategy and shared by all threads;
 // a LightSampler (one per thread) turns them into a distribution per shading point.
@@ -37,10 +38,20 @@ enum class Heuristic { Power, Balance };
 Heuristic parse_heuristic(const std::string& s);  ///< "power" | "balance"
 const char* to_string(Heuristic h);
 
+/// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
+/// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).
 struct OracleOptions {
-  int resolution = 64;  ///< top-level cells per side of the oracle's table (1..256)
-  int directions = 4;   ///< BSDF evaluations per cell: a square number (1, 4, 9, 16, ...)
+  int resolution = 48;        ///< top-level cells per side of the oracle's table (1..256)
+  int directions = 1;         ///< first-pass points per cell: a square number (1, 4, 9, ..., 256)
+  int bsdf_samples = 256;     ///< BSDF samples per shading point that find the lobe: a square number (0..65536)
+  int refine_points = 1024;   ///< second-pass points, shared by the cells by their first estimate (0..1e6)
+  /// Weight the cells for MIS with the BSDF sample (what the renderer does) rather than by their share
+  /// of the integrand alone (the analyzer's exact-T limit; the better light sample without MIS).
+  bool mis_compensation = true;
 };
+
+class OracleCells;
+class OracleSampler;
 
 /// What a strategy needs that is built once per environment map and shared by all threads.
 struct StrategyTables {
@@ -49,6 +60,8 @@ struct StrategyTables {
   /// the compensated one for mis-comp, the oracle's finer table for oracle.
   std::shared_ptr<const ImportanceTable> table;
   OracleOptions oracle;
+  /// The oracle's per-cell radiance distributions (null for the other strategies).
+  std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
   double build_seconds = 0;
 
@@ -71,7 +84,7 @@ struct ShadingContext {
   const Material* bsdf = nullptr;
   std::uint64_t jitter = 0;  ///< random bits for strategies that randomize their set-up (oracle)
   /// True when the material reflects only (f = 0 below the surface): the oracle then skips the cells
-  /// whose cone lies entirely below the surface.
+  /// whose cone lies entirely below the surface and counts nothing from below in its cell weights.
   bool opaque = false;
   /// Cosine between a normal-mapped shading normal and the geometric normal; below 1 the product
   /// strategy widens its proxy's roughness by that angle (envpis::widen_roughness): its proxy lobes
@@ -108,12 +121,7 @@ class LightSampler {
   Strategy strategy_;
   const ImportanceTable* table_ = nullptr;
   std::unique_ptr<ProductSampler> product_;
-  // oracle
-  OracleOptions oracle_;
-  std::vector<float> su_, sv_, dx_, dy_, dz_;  // per-evaluation scratch (R^2 * k^2)
-  DiscreteDistribution2D oracle_top_;  // R x R cell weights
-  std::vector<int> active_;            // cells evaluated at this shading point
-  bool oracle_valid_ = false;
+  std::unique_ptr<OracleSampler> oracle_;
 };
 
 }  // namespace envpis::render

@@ -16,8 +16,9 @@ cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DENVPIS_BUILD_TESTS=
 cmake --build "$BUILD" -j"$(nproc)" --target envpis_cmd
 ENV_MAP=${ENV_MAP:-/usr/share/blender/datafiles/studiolights/world/sunset.exr}
 # 384x64 (half of fig1's 768x128), 16 spp, reference: mis at 1024 spp with another seed. Equal time:
-# every strategy gets the time mis took for 16 spp. The oracle uses 32x32 cells (4 BSDF evaluations
-# each) instead of the renderer's 64x64: 4x cheaper, and measured as good per sphere on this scene.
+# every strategy gets the time mis took for 16 spp. The oracle uses a 32x32 top level (4 first-pass
+# points per cell) instead of the renderer's 48x48; it is still by far the slowest strategy
+# (docs/analyzer.md, "The oracle"; the demo's run time was not measured again since).
 "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$ENV_MAP" --integrator direct \
   --strategies mis,mis-comp,product,oracle --spp 16 --ref-spp 1024 --equal-time auto \
   --width 384 --height 64 --oracle-res 32 --oracle-dirs 4 --out "$OUT/compare"

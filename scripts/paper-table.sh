@@ -7,7 +7,8 @@
 #
 # Sizes are modest so the whole table runs in about 16 minutes on 2 free cores (build not included):
 # 384x64 pixels, 32 spp, reference mis at 4096 spp with another seed (cached under ~/.cache/envpis),
-# the oracle at the renderer's defaults (64x64 cells x 4 BSDF evaluations; it is ~80% of the time).
+# the oracle at the renderer's defaults (48x48 cells, render/oracle.h; it is most of the time: about
+# 600 us of CPU per sample, docs/analyzer.md "The oracle").
 # Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD (REBUILD=0: use BUILD as is),
 # STRATEGIES (default mis,mis-comp,product,oracle), SEEDS (renders per strategy; relMSE is their
 # median, default 1), SAMPLER (sobol or independent; default: the renderer's, sobol) and EXTRA (more
@@ -20,7 +21,7 @@ SPP=${SPP:-32}
 REF_SPP=${REF_SPP:-4096}
 WIDTH=${WIDTH:-384}
 HEIGHT=${HEIGHT:-64}
-ORACLE_RES=${ORACLE_RES:-64}
+ORACLE_RES=${ORACLE_RES:-48}
 MAPS=${MAPS:-/usr/share/blender/datafiles/studiolights/world/*.exr}
 STRATEGIES=${STRATEGIES:-mis,mis-comp,product,oracle}
 SEEDS=${SEEDS:-1}
@@ -39,7 +40,7 @@ for map in $MAPS; do
   echo "paper-table: $name"
   "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$map" --integrator direct \
     --strategies "$STRATEGIES" --seeds "$SEEDS" --sampler "$SAMPLER" --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
-    --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 4 --no-convergence \
+    --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 1 --no-convergence \
     --quiet --out "$OUT/$name" "${EXTRA_ARGS[@]}" | sed 's/^/  /'
 done
 "$PY" scripts/paper_table.py "$OUT"/*/metrics.json > "$OUT/table.md"

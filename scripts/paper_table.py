@@ -214,7 +214,7 @@ def main(paths):
                f"the seconds mis took at {m0['equal_spp']['spp']} spp; reference: {m0['reference']['strategy']} at "
                f"{m0['reference']['spp']} spp with another seed (its own noise adds ~{f(100 * geomean([m['reference']['relmse_floor'] / r['relmse'] for _, m in runs for r in m['equal_spp']['strategies'] if r['strategy'] == 'mis']), 1)}% "
                f"of mis's relMSE); oracle: {m0['oracle_options']['resolution']}^2 cells x "
-               f"{m0['oracle_options']['directions']} BSDF evaluations. Columns: the GGX conductor spheres by roughness "
+               f"{m0['oracle_options']['directions']} first-pass point(s) per cell. Columns: the GGX conductor spheres by roughness "
                f"(alpha), then the diffuse and the glass (alpha 0.2) sphere. relMSE over each sphere's pixels.")
     out.append("")
     pooled = {}

@@ -111,8 +111,12 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "(K; 0: off; default: the library's)")
       ->type_name("K");
   sub.add_option("--oracle-res", oracle_res, "oracle: top cells per side, 1..256")->type_name("INT")->capture_default_str();
-  sub.add_option("--oracle-dirs", oracle_dirs, "oracle: BSDF evaluations per cell (a square number)")
+  sub.add_option("--oracle-dirs", oracle_dirs, "oracle: first-pass points per top cell (a square number; docs/analyzer.md)")
       ->type_name("INT")
+      ->capture_default_str();
+  sub.add_option("--oracle-compensation", oracle_compensation,
+                 "oracle: weight its cells for MIS with the BSDF sample (on) or by their share alone (off)")
+      ->type_name("on|off")
       ->capture_default_str();
   sub.add_option("--proxy-transform", proxy_transform, "product: proxy roughness transform (default: the library's)")
       ->type_name("T");
@@ -163,6 +167,9 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   const int k = static_cast<int>(std::lround(std::sqrt(double(o.oracle.directions))));
   if (k * k != o.oracle.directions)
     throw Error("--oracle-dirs: must be a square number (1, 4, 9, 16, ...), got '" + oracle_dirs + "'");
+  if (oracle_compensation != "on" && oracle_compensation != "off")
+    throw Error("--oracle-compensation: expected on or off, got '" + oracle_compensation + "'");
+  o.oracle.mis_compensation = oracle_compensation == "on";
   if (!proxy_transform.empty()) {
     try {
       o.product.proxy.transform = parse_roughness_transform(proxy_transform);

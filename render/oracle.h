@@ -1,0 +1,98 @@
+// The oracle light distribution: a per-shading-point top level over the cells of a fine light table
+// (48 x 48 by default), each weighted from an estimate of its true share of the integrand
+// g = BSDF x |cos| x radiance (channel average), and inside the chosen cell the table's own fine
+// density. It is the paper's two-level scheme with a (nearly) perfect top level: the analyzer's
+// exact-T limit (docs/analyzer.md), made usable in a renderer, and the limit the product sampler's
+// top level is measured against (docs/analyzer.md, "The oracle").
+//
+// The share of a cell, the integral of g over it, is estimated per shading point by two techniques
+// combined with the balance heuristic:
+//   - points drawn from the cell's radiance distribution (each fine texel's mean radiance, computed
+//     once per map), so g / density varies only as the BSDF does: a small sun inside a cell costs
+//     nothing (drawing from the table's importance instead failed there: near a small source the
+//     table raises texels to 1/K of its peak, and most such texels see only sky);
+//   - BSDF-sampled directions, which find a lobe narrower than a cell wherever it lies (a fixed
+//     number of evaluations per cell misses it).
+// A first pass gives every cell one point (16 to a cell that straddles the horizon of a surface seen
+// from above only: its brightest texels may lie below and say nothing of the rest); a second gives
+// further points to the cells in proportion to their first estimate (the lobe's peak, a sun).
+//
+// The weights: the estimated share alone (mis_compensation off) makes the best light sample, but
+// next to a BSDF sample combined by MIS the light sample should go where the BSDF sample does not:
+// one light and one BSDF sample have least variance under the balance heuristic when their
+// densities sum to a multiple of g, so each cell gets max(share / 4, 2 share - P_bsdf(cell)), with
+// P_bsdf(cell) estimated by the same points (the compensation of Karlik et al. 2019, per cell).
+//
+// Unbiased whatever the estimates: pdf() is exactly the density sample() draws from (the table's
+// two levels with this top level), and every cell a light sample can use keeps at least 1e-3 of its
+// environment share, so no direction with radiance depends on BSDF samples alone.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "envpis/envpis.h"
+#include "render/strategy.h"
+
+namespace envpis::render {
+
+/// What the oracle needs per environment map, shared by all threads: the light table (whose top
+/// level is the oracle's grid), each fine texel's mean radiance, and each cell's fine distribution
+/// as a separate F x F distribution, so points can be drawn inside one given cell.
+class OracleCells {
+ public:
+  OracleCells(const EnvironmentMap& env, std::shared_ptr<const ImportanceTable> table);
+  const ImportanceTable& table() const { return *table_; }
+  /// Mean radiance over texel (x, y) of cell c (0 <= x, y < F): what a light sample of that texel
+  /// sees on average (the texel's importance may be raised above it near a small bright source).
+  Rgb radiance(int c, int x, int y) const { return radiance_[index(c, x, y)]; }
+  /// Cell c's fine distribution over its F x F texels (invalid when the cell has no importance).
+  const DiscreteDistribution2D& cell(int c) const { return cells_[static_cast<std::size_t>(c)]; }
+
+ private:
+  std::size_t index(int c, int x, int y) const {
+    const std::size_t F = static_cast<std::size_t>(table_->cell_resolution());
+    return (static_cast<std::size_t>(c) * F + static_cast<std::size_t>(y)) * F + static_cast<std::size_t>(x);
+  }
+  std::shared_ptr<const ImportanceTable> table_;
+  std::vector<DiscreteDistribution2D> cells_;
+  std::vector<Rgb> radiance_;  // per fine texel, cell-major
+};
+
+/// Per-thread oracle distribution (not thread-safe). prepare() costs a few thousand BSDF and
+/// environment evaluations (OracleOptions), sample() and pdf() are those of the table's two levels.
+class OracleSampler {
+ public:
+  OracleSampler(std::shared_ptr<const OracleCells> cells, const OracleOptions& options);
+  void prepare(const ShadingContext& sc);
+  DirectionSample sample(Point2 u) const;
+  float pdf(Vec3 wi) const;
+  /// The prepared top level (for tests): cell weights, or invalid when no cell has any.
+  const DiscreteDistribution2D& top() const { return top_; }
+
+ private:
+  struct Point {
+    int cell;
+    float g;   // f |cos| L, channel average (0 where the light sample cannot reach)
+    float q;   // solid-angle density of the cell's fine distribution
+    float pb;  // the material's BSDF sampling density
+  };
+  void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k points in cell c
+  Point evaluate(const ShadingContext& sc, Point2 p, int c, float q, Rgb radiance, bool skip_below) const;
+  void estimate();  // cell_sum_ from points_ and count_
+
+  std::shared_ptr<const OracleCells> cells_;
+  OracleOptions options_;
+  DiscreteDistribution2D top_;
+  std::vector<Point> points_;     // every evaluated direction of this shading point
+  std::vector<int> count_;        // per cell: points drawn from its fine distribution
+  std::vector<int> active_;       // cells a light sample can use
+  std::vector<bool> horizon_;     // per active cell: it straddles the horizon of a surface seen from above only
+  std::vector<double> cell_sum_;  // per cell: the estimate of integral over the cell of g
+  std::vector<double> bsdf_mass_;  // per cell: the estimate of the BSDF sample's probability to land in it
+  std::vector<double> weight_;     // per cell: its weight before normalization and the floor
+  bool valid_ = false;
+};
+
+}  // namespace envpis::render

@@ -1,0 +1,143 @@
+// Tests of the oracle strategy (render/oracle.h):
+//   - its pdf is the density of its samples (chi-square, tests/chi2.h) for a sharp and a medium glossy
+//     lobe, a diffuse surface and a closed glass sphere under a small bright sun;
+//   - it is a limit where it should be: by the analyzer (exact, no noise), the renderer's estimator
+//     with the oracle has no more variance than with the product sampler at every tested shading
+//     point of spheres under that sun (GGX alpha 0.1 and 0.3, Lambert, glass); at alpha 0.02 its
+//     share estimate is checked against the exact 48 x 48 top level instead.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "chi2.h"
+#include "render/analyzer.h"
+#include "render/oracle.h"
+#include "render/scenes.h"
+#include "render/strategy.h"
+
+namespace envpis::render {
+namespace {
+
+/// A small (1.5 degree), very bright sun low behind the camera, over the procedural sky: what makes
+/// cell weights hard (a few texels carry most of the light) and what the fig1 sunrise map has.
+std::shared_ptr<const EnvironmentMap> sun_sky() {
+  static const auto env = [] {
+    SkyOptions o;
+    o.width = 256;
+    o.height = 128;
+    o.sun_elevation = 20.0f;
+    o.sun_azimuth = 260.0f;  // towards -Y: behind the camera, so the spheres' front reflects it
+    o.sun_radius = 1.5f;
+    o.sun_radiance = 3000.0f;
+    return std::make_shared<const EnvironmentMap>(make_procedural_sky(o));
+  }();
+  return env;
+}
+
+Material single(std::shared_ptr<const Lobe> lobe, bool closed = false) {
+  Material m;
+  m.add(std::move(lobe), 1.0f);
+  m.set_closed_surface(closed);
+  return m;
+}
+
+/// One unit sphere of material `m` seen from -Y; nothing else, so visibility is the horizon.
+Scene sphere_scene(Material m, bool transmissive) {
+  Scene s;
+  s.add_material("m", std::move(m), transmissive);
+  s.add_sphere("sphere", {0, 0, 0}, 1.0f, 0);
+  CameraSpec cam;
+  cam.from = {0, -10, 0};
+  cam.to = {0, 0, 0};
+  cam.vfov_degrees = 14.0f;
+  cam.width = 48;
+  cam.height = 48;
+  s.set_camera(cam);
+  s.set_environment(sun_sky());
+  s.commit();
+  return s;
+}
+
+struct Case {
+  std::string name;
+  std::shared_ptr<const Lobe> lobe;
+  bool transmissive = false;
+};
+
+std::vector<Case> cases() {
+  return {{"ggx-0.02", make_conductor_reflectance(0.02f, {0.9f, 0.9f, 0.9f})},
+          {"ggx-0.1", make_conductor_reflectance(0.1f, {0.9f, 0.8f, 0.7f})},
+          {"ggx-0.3", make_conductor_reflectance(0.3f, {0.9f, 0.8f, 0.7f})},
+          {"lambert", make_lambert({0.8f, 0.8f, 0.8f})},
+          {"glass-0.2", make_dielectric(0.2f, 1.5f), true}};
+}
+
+// sample() and pdf() describe the same density, at a shading point whose lobe sees the sun.
+TEST(Oracle, PdfIsTheDensityOfItsSamples) {
+  const StrategyTables tables = StrategyTables::build(*sun_sky(), Strategy::Oracle);
+  const int n = tables.table->fine_resolution();
+  const std::vector<Case> cs = cases();
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    SCOPED_TRACE(cs[i].name);
+    const Material m = single(cs[i].lobe, cs[i].transmissive);
+    const Frame frame(normalize(Vec3{0.1f, -0.9f, 0.35f}));
+    ShadingContext sc;
+    sc.n = frame.n;
+    sc.wo = normalize(Vec3{0.0f, -1.0f, 0.05f});
+    sc.wo_local = frame.to_local(sc.wo);
+    sc.frame = &frame;
+    sc.bsdf = &m;
+    sc.jitter = 0x9e3779b97f4a7c15ULL * (i + 1);
+    sc.opaque = !cs[i].transmissive;
+    LightSampler light(tables);
+    light.prepare(sc);
+    test::Chi2Options opt = test::table_aligned(n);  // the pdf is constant on the table's texels
+    opt.samples = 200000;
+    opt.test_count = static_cast<int>(cs.size());
+    opt.seed = 31 + i;
+    const test::Chi2Result r = test::chi2_test(
+        [&](float u1, float u2) -> std::optional<Vec3> {
+          const DirectionSample d = light.sample({u1, u2});
+          if (!(d.pdf > 0)) return std::nullopt;
+          return d.direction;
+        },
+        [&](Vec3 d) { return double(light.pdf(d)); }, opt);
+    EXPECT_TRUE(r.passed) << r.message;
+    EXPECT_NEAR(r.pdf_integral, 1.0, 1e-3);
+  }
+}
+
+// The limit, by the analyzer: V(oracle) <= V(product) at every point for the medium and broad lobes,
+// the diffuse and the glass sphere. It fails with mis_compensation off: the share alone loses to the
+// product under MIS at 3 of the 4 points at alpha 0.1 (by 1.1-1.8x) and at 2 at alpha 0.3. Not at alpha 0.02, where the product's
+// estimator is 2-4x better on this map (docs/analyzer.md, "The oracle"); there the share alone is
+// checked against the exact 48 x 48 top level it estimates (light sample alone, within 10%).
+TEST(Oracle, IsALimitOfTheProductSampler) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    const bool sharp = c.name == "ggx-0.02";
+    const Scene scene = sphere_scene(single(c.lobe), c.transmissive);
+    AnalyzerOptions o;
+    o.strategies = {Strategy::Product, Strategy::Oracle};
+    o.exact_levels = {48};
+    o.oracle.mis_compensation = !sharp;
+    const Analyzer a(scene, o);
+    int point = 0;
+    for (const ShadingPointRef& p : first_hit_points(scene, 4)) {
+      SCOPED_TRACE("point " + std::to_string(point++));
+      const auto x = a.analyze(p.ray, 7);
+      ASSERT_TRUE(x);
+      EXPECT_LT(std::fabs(x->bias[1]), 1e-4);
+      if (sharp)
+        EXPECT_LE(x->v_light[1], 1.1 * x->v_exact[0]) << "share " << x->v_light[1] << ", exact-48 " << x->v_exact[0];
+      else
+        EXPECT_LE(x->v[1], x->v[0]) << "oracle " << x->v[1] << ", product " << x->v[0];
+    }
+  }
+}
+
+}  // namespace
+}  // namespace envpis::render
