@@ -50,7 +50,8 @@ json file_identity(const std::string& path) {
 
 /// The options of `strategy` that change its image (each only for the strategies that use it).
 void put_strategy_options(json& key, const Scene& scene, const RenderOptions& base, Strategy strategy) {
-  if (strategy == Strategy::Oracle) key["oracle"] = {base.oracle.resolution, base.oracle.directions};
+  if (strategy == Strategy::Oracle)  // "v2": the oracle of render/oracle.h (cell shares by quadrature)
+    key["oracle"] = {base.oracle.resolution, base.oracle.directions, base.oracle.mis_compensation, "v2"};
   if (strategy != Strategy::Bsdf && strategy != Strategy::Oracle) key["top"] = base.light_table.top_resolution;
   if (strategy != Strategy::Bsdf) {
     key["peak_ratio"] = base.light_table.peak_ratio;
