@@ -132,7 +132,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
       ->type_name("FLOAT");
   sub.add_option("--subcells", subcells,
                  "product: S, the sub-cells per top cell along each axis that the product weights again inside "
-                 "the chosen cell (the light tables get S x S sub-cells), 1..8; 1: the paper's one-level product")
+                 "the chosen cell (the light tables get S x S sub-cells), 1..8; 1: the paper's one-level product "
+                 "(docs/refinement.md)")
       ->type_name("S")
       ->capture_default_str();
   sub.add_option("--refine-cells", refine_cells,
