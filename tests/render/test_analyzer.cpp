@@ -16,6 +16,7 @@
 
 #include "cli_util.h"
 #include "render/analyzer.h"
+#include "render_test_scenes.h"
 #include "render/camera.h"
 #include "render/integrator.h"
 #include "render/sampler.h"
@@ -23,6 +24,9 @@
 
 namespace envpis::render {
 namespace {
+
+using envpis::test::single;
+using envpis::test::sphere_scene;
 
 /// A smooth coloured sky: a broad warm lobe (a soft sun, 40x the dimmest sky) over a blue gradient.
 /// Every strategy's weights f / p stay bounded on it, so sample variances have finite fourth moments.
@@ -44,29 +48,6 @@ std::shared_ptr<const EnvironmentMap> smooth_sky() {
     return std::make_shared<const EnvironmentMap>(EnvironmentMap::from_pixels(w, h, std::move(px)));
   }();
   return env;
-}
-
-/// One unit sphere of material `m` seen from -Y (nothing else in the scene: visibility is the horizon).
-Scene sphere_scene(Material m, bool transmissive, std::shared_ptr<const EnvironmentMap> env) {
-  Scene s;
-  s.add_material("m", std::move(m), transmissive);
-  s.add_sphere("sphere", {0, 0, 0}, 1.0f, 0);
-  CameraSpec cam;
-  cam.from = {0, -10, 0};
-  cam.to = {0, 0, 0};
-  cam.vfov_degrees = 14.0f;
-  cam.width = 48;
-  cam.height = 48;
-  s.set_camera(cam);
-  s.set_environment(std::move(env));
-  s.commit();
-  return s;
-}
-
-Material single(std::shared_ptr<const Lobe> lobe) {
-  Material m;
-  m.add(std::move(lobe), 1.0f);
-  return m;
 }
 
 AnalyzerOptions options_for(std::vector<Strategy> strategies) {

@@ -14,12 +14,16 @@
 
 #include "chi2.h"
 #include "render/analyzer.h"
+#include "render_test_scenes.h"
 #include "render/oracle.h"
 #include "render/scenes.h"
 #include "render/strategy.h"
 
 namespace envpis::render {
 namespace {
+
+using envpis::test::single;
+using envpis::test::sphere_scene;
 
 /// A small (1.5 degree), very bright sun low behind the camera, over the procedural sky: what makes
 /// cell weights hard (a few texels carry most of the light) and what the fig1 sunrise map has.
@@ -35,30 +39,6 @@ std::shared_ptr<const EnvironmentMap> sun_sky() {
     return std::make_shared<const EnvironmentMap>(make_procedural_sky(o));
   }();
   return env;
-}
-
-Material single(std::shared_ptr<const Lobe> lobe, bool closed = false) {
-  Material m;
-  m.add(std::move(lobe), 1.0f);
-  m.set_closed_surface(closed);
-  return m;
-}
-
-/// One unit sphere of material `m` seen from -Y; nothing else, so visibility is the horizon.
-Scene sphere_scene(Material m, bool transmissive) {
-  Scene s;
-  s.add_material("m", std::move(m), transmissive);
-  s.add_sphere("sphere", {0, 0, 0}, 1.0f, 0);
-  CameraSpec cam;
-  cam.from = {0, -10, 0};
-  cam.to = {0, 0, 0};
-  cam.vfov_degrees = 14.0f;
-  cam.width = 48;
-  cam.height = 48;
-  s.set_camera(cam);
-  s.set_environment(sun_sky());
-  s.commit();
-  return s;
 }
 
 struct Case {
@@ -119,7 +99,7 @@ TEST(Oracle, IsALimitOfTheProductSampler) {
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);
     const bool sharp = c.name == "ggx-0.02";
-    const Scene scene = sphere_scene(single(c.lobe), c.transmissive);
+    const Scene scene = sphere_scene(single(c.lobe), c.transmissive, sun_sky());
     AnalyzerOptions o;
     o.strategies = {Strategy::Product, Strategy::Oracle};
     o.exact_levels = {48};
