@@ -173,14 +173,7 @@ Scene build_fig1(std::shared_ptr<const EnvironmentMap> env, std::string env_desc
   s.add_material("glass", single(make_dielectric(0.2f, 1.5f)), true);
   const float spacing = 2.3f;
   for (int i = 0; i < 8; ++i) s.add_sphere(names[i], {(float(i) - 3.5f) * spacing, 0.0f, 0.0f}, 1.0f, i);
-  CameraSpec cam;
-  cam.from = {0, -40, 0};
-  cam.to = {0, 0, 0};
-  cam.up = {0, 0, 1};
-  cam.vfov_degrees = 4.8f;
-  cam.width = 768;
-  cam.height = 128;
-  s.set_camera(cam);
+  s.set_camera(look_at({0, -40, 0}, {0, 0, 0}, 4.8f, 768, 128));
   s.set_environment(std::move(env));
   s.set_environment_description(std::move(env_desc));
   s.commit();
@@ -196,14 +189,7 @@ Scene build_fig5(std::shared_ptr<const EnvironmentMap> env, std::string env_desc
   for (Vec3& p : knot.positions) p = p + Vec3{0, 0, 1.36f};  // lowest point 0.04 above the ground
   s.add_mesh("knot", std::move(knot), 0);
   s.add_mesh("ground", make_quad({0, 0, 0}, 12.0f, 12.0f), 1);
-  CameraSpec cam;
-  cam.from = {0.0f, -9.0f, 4.6f};
-  cam.to = {0.0f, 0.0f, 1.2f};
-  cam.up = {0, 0, 1};
-  cam.vfov_degrees = 34.0f;
-  cam.width = 640;
-  cam.height = 360;
-  s.set_camera(cam);
+  s.set_camera(look_at({0.0f, -9.0f, 4.6f}, {0.0f, 0.0f, 1.2f}, 34.0f, 640, 360));
   s.set_environment(std::move(env));
   s.set_environment_description(std::move(env_desc));
   s.commit();

@@ -27,6 +27,17 @@ struct CameraSpec {
   int height = 360;
 };
 
+/// A perspective camera at `from` looking at `to`, +Z up.
+inline CameraSpec look_at(Vec3 from, Vec3 to, float vfov_degrees, int width, int height) {
+  CameraSpec c;
+  c.from = from;
+  c.to = to;
+  c.vfov_degrees = vfov_degrees;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
 class Camera {
  public:
   Camera() = default;

@@ -63,4 +63,36 @@ Point2 DiscreteDistribution2D::invert(int x, int y, Point2 offset) const {
   return {detail::clamp_unit(ux), detail::clamp_unit(uy)};
 }
 
+double CumulativeDistribution2DView::build(const float* masses, int n, float* cdf) {
+  ENVPIS_ASSERT(n >= 1);
+  const std::size_t count = static_cast<std::size_t>(n) * n;
+  double total = 0;
+  for (std::size_t i = 0; i < count; ++i) total += masses[i];
+  // Uniform sums for a zero distribution keep every search well defined.
+  const bool uniform = !(total > 0);
+  double run = 0;
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * n + x;
+      const float sum = uniform ? float(i + 1) / float(count) : static_cast<float>((run += masses[i]) / total);
+      if (x < n - 1)
+        cdf[n + static_cast<std::size_t>(y) * (n - 1) + x] = sum;
+      else
+        cdf[y] = sum;
+    }
+  }
+  cdf[n - 1] = 1.0f;
+  return total;
+}
+
+Point2 CumulativeDistribution2DView::invert(int x, int y, Point2 offset) const {
+  ENVPIS_ASSERT(x >= 0 && x < n_ && y >= 0 && y < n_);
+  const float row_start = y > 0 ? cdf_[y - 1] : 0.0f, row_end = cdf_[y];
+  const float* row = cdf_ + n_ + static_cast<std::size_t>(y) * (n_ - 1);
+  const float c0 = x > 0 ? row[x - 1] : row_start, c1 = x < n_ - 1 ? row[x] : row_end;
+  const float row_mass = row_end - row_start;
+  const float ux = row_mass > 0 ? (c0 + offset.x * (c1 - c0) - row_start) / row_mass : 0.5f;
+  return {detail::clamp_unit(ux), detail::clamp_unit(row_start + offset.y * row_mass)};
+}
+
 }  // namespace envpis

@@ -12,6 +12,9 @@
 #include "parallel.h"
 #include "texel_importance.h"
 
+#define ENVPIS_KERNEL_NS scalar
+#include "equal_area_impl.h"
+
 namespace envpis {
 
 namespace {
@@ -183,11 +186,19 @@ void ImportanceTable::build_cones() {
 }
 
 ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
-  // The sub-cell first, and the top cell from it, so that the two always agree under rounding.
-  const int TS = T_ * S_;
+  // The sub-cell first, and the top cell and texel from it, so that they always agree under rounding.
+  const int TS = T_ * S_, F = N_ / TS;
   const int lx = std::clamp(static_cast<int>(p.x * TS), 0, TS - 1);
   const int ly = std::clamp(static_cast<int>(p.y * TS), 0, TS - 1);
-  return {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_, ly * TS + lx};
+  const float fx = p.x * float(N_), fy = p.y * float(N_);
+  const int tx = std::clamp(static_cast<int>(fx), lx * F, lx * F + F - 1);
+  const int ty = std::clamp(static_cast<int>(fy), ly * F, ly * F + F - 1);
+  return {(ly / S_) * T_ + lx / S_,
+          (ly % S_) * S_ + lx % S_,
+          ly * TS + lx,
+          tx - lx * F,
+          ty - ly * F,
+          {detail::clamp_unit(fx - float(tx)), detail::clamp_unit(fy - float(ty))}};
 }
 
 int ImportanceTable::cell_of(Point2 p) const { return locate(p).cell; }
@@ -197,15 +208,55 @@ int ImportanceTable::cell_of_direction(Vec3 d) const {
   return cell_of(equal_area_sphere_to_square(d));
 }
 
+float ImportanceTable::solid_angle_pdf(float cell_pmf, float pdf_in_cell) const {
+  return cell_pmf * pdf_in_cell * float(T_) * float(T_) * kInv4Pi;
+}
+
 namespace {
 // The fine-level cell (a sub-cell) of sub-cell s of top cell c.
 int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S) + (c % T) * S + s % S; }
+
+struct TexelPoint {
+  Point2 p;
+  bool interior;  // far enough inside its texel that locate(p) finds this texel again
+};
+
+// The equal-area point of texel t (and the offset inside it) of fine-level cell `leaf`, one of TS x TS
+// cells of F x F texels.
+TexelPoint texel_point(int leaf, int TS, int F, const CumulativeDistribution2DView::Sample& t) {
+  const int lx = leaf % TS, ly = leaf / TS, N = TS * F;
+  // The square -> sphere -> square round trip is accurate to a few 1e-6 (tests/test_equal_area.cpp);
+  // 2% of a texel is at least 7e-6 for N <= 2904 and scales with the texel.
+  constexpr float kMargin = 0.02f;
+  const bool interior = t.offset.x > kMargin && t.offset.x < 1 - kMargin && t.offset.y > kMargin &&
+                        t.offset.y < 1 - kMargin && N <= 2904;
+  // Keep the point kEdge inside its cell. Rounding can put it on the cell's far edge (an offset of
+  // 1 - 2^-24 in the last texel), and a point within round-off of the edge can come back from
+  // square -> sphere -> square in the neighbouring cell, whose product weight may be 0 (a cell wholly
+  // below an opaque proxy's horizon): the sample would get pdf 0 where pdf() integrates to 1. The
+  // move is under 2% of a texel for N <= 1000 and such samples are never `interior`, so their density
+  // is looked up again from the direction, which finds this cell.
+  constexpr float kEdge = 2e-5f;
+  const float inv = 1.0f / float(TS);
+  const float px = (float(lx * F + t.x) + t.offset.x) / float(N);
+  const float py = (float(ly * F + t.y) + t.offset.y) / float(N);
+  return {{std::clamp(px, float(lx) * inv + kEdge, float(lx + 1) * inv - kEdge),
+           std::clamp(py, float(ly) * inv + kEdge, float(ly + 1) * inv - kEdge)},
+          interior};
+}
+
+Vec3 square_to_sphere(Point2 p) {
+  Vec3 d;
+  detail::scalar::square_to_sphere_one<float>(p.x, p.y, d.x, d.y, d.z);
+  return d;
+}
 }  // namespace
 
 float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
   const Located at = locate(p);
   if (at.cell != c) return 0.0f;
-  return subcells(c).pmf(at.sub) * float(S_ * S_) * fine_->pdf(at.leaf, p);
+  const float F = float(N_ / (T_ * S_));
+  return subcells(c).pmf(at.sub) * float(S_ * S_) * (fine_->cell(at.leaf).pmf(at.tx, at.ty) * F * F);
 }
 
 DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point2 u, const SubcellLevel* sub) const {
@@ -220,12 +271,15 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
     ENVPIS_ASSERT(level.valid() && level.width() == S_);
     in = level.sample(cell.offset);
   }
-  const detail::FineLevel::Sample s = fine_->sample(leaf_of(T_, S_, c, in.y * S_ + in.x), in.offset);
-  out.direction = equal_area_square_to_sphere(s.p);
+  const int TS = T_ * S_, F = N_ / TS, leaf = leaf_of(T_, S_, c, in.y * S_ + in.x);
+  const CumulativeDistribution2DView::Sample texel = fine_->cell(leaf).sample(in.offset);
+  const TexelPoint at = texel_point(leaf, TS, F, texel);
+  out.direction = square_to_sphere(at.p);
   out.cell = c;
   // Far from texel edges the sampled texel is the one pdf() finds: its density directly (the same
   // arithmetic); near an edge, pdf() of the direction, so the two always agree.
-  out.pdf = s.interior ? solid_angle_pdf(cell.pmf, in.pmf * float(S_ * S_) * s.pdf) : pdf(top, out.direction, sub);
+  out.pdf = at.interior ? solid_angle_pdf(cell.pmf, in.pmf * float(S_ * S_) * (texel.pmf * float(F) * float(F)))
+                        : pdf(top, out.direction, sub);
   return out;
 }
 
@@ -236,14 +290,15 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const Subc
   const float cell_pmf = top.pmf(at.cell);
   if (!(cell_pmf > 0)) return 0.0f;
   const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).pmf(at.sub) : 1.0f;
-  return solid_angle_pdf(cell_pmf, sub_pmf * float(S_ * S_) * fine_->pdf(at.leaf, p));
+  const float F = float(N_ / (T_ * S_));
+  return solid_angle_pdf(cell_pmf, sub_pmf * float(S_ * S_) * (fine_->cell(at.leaf).pmf(at.tx, at.ty) * F * F));
 }
 
 Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return {0.5f, 0.5f};
   const Point2 p = equal_area_sphere_to_square(d);
   const Located at = locate(p);
-  Point2 offset = fine_->invert(at.leaf, p);
+  Point2 offset = fine_->cell(at.leaf).invert(at.tx, at.ty, at.in_texel);
   if (S_ > 1) offset = (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).invert(at.sub % S_, at.sub / S_, offset);
   return top.invert(at.cell % T_, at.cell / T_, offset);
 }

@@ -19,13 +19,7 @@ inline Scene sphere_scene(Material m, bool transmissive, std::shared_ptr<const E
   Scene s;
   s.add_material("m", std::move(m), transmissive);
   s.add_sphere("sphere", {0, 0, 0}, 1.0f, 0);
-  CameraSpec cam;
-  cam.from = {0, -10, 0};
-  cam.to = {0, 0, 0};
-  cam.vfov_degrees = 14.0f;
-  cam.width = 48;
-  cam.height = 48;
-  s.set_camera(cam);
+  s.set_camera(render::look_at({0, -10, 0}, {0, 0, 0}, 14.0f, 48, 48));
   s.set_environment(std::move(env));
   s.commit();
   return s;

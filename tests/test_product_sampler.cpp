@@ -397,6 +397,25 @@ TEST(ProductSampler, EnvironmentMixtureAndOptions) {
   EXPECT_THROW(ProductSampler(table, o), Error);
 }
 
+namespace {
+// The smallest ratio of the product's density to the environment table's, over 400 random directions
+// at each configuration, where both sample (pdf > 0).
+double worst_density_ratio(ProductSampler& ps, const ImportanceTable& table, const std::vector<Config>& configs,
+                           unsigned seed) {
+  std::mt19937_64 rng(seed);
+  double worst = HUGE_VAL;
+  for (const Config& c : configs) {
+    if (!ps.prepare(c.n, c.wo, c.proxy)) continue;
+    for (int i = 0; i < 400; ++i) {
+      const Vec3 d = random_direction(rng);
+      const float p = ps.pdf(d), e = table.pdf(d);
+      if (p > 0 && e > 0) worst = std::min(worst, double(p) / e);
+    }
+  }
+  return worst;
+}
+}  // namespace
+
 TEST(ProductSampler, EnvironmentFloorBoundsTheDensityByTheEnvironments) {
   // The documented guarantee: wherever the product samples (pdf > 0), its density is at least
   // r / (1 + r) of the environment table's, over random shading points and every test map. Without the
@@ -406,16 +425,7 @@ TEST(ProductSampler, EnvironmentFloorBoundsTheDensityByTheEnvironments) {
       ProductSamplerOptions o;
       o.env_floor = r;
       ProductSampler ps(*table, o);
-      std::mt19937_64 rng(21);
-      double worst = HUGE_VAL;
-      for (const Config& c : random_configs(60, 17)) {
-        if (!ps.prepare(c.n, c.wo, c.proxy)) continue;
-        for (int i = 0; i < 400; ++i) {
-          const Vec3 d = random_direction(rng);
-          const float p = ps.pdf(d), e = table->pdf(d);
-          if (p > 0 && e > 0) worst = std::min(worst, double(p) / e);
-        }
-      }
+      const double worst = worst_density_ratio(ps, *table, random_configs(60, 17), 21);
       if (r > 0)
         EXPECT_GE(worst, r / (1 + r) * (1 - 1e-4)) << name;
       else
@@ -566,16 +576,7 @@ TEST(ProductSampler, RefinedFloorBoundsTheDensityByTheEnvironments) {
       o.env_floor = r;
       o.refine_cells = r > 0 ? 8 : 0;  // both ways of weighing sub-cells, each bounded
       ProductSampler ps(*table, o);
-      std::mt19937_64 rng(22);
-      double worst = HUGE_VAL;
-      for (const Config& c : random_configs(40, 18)) {
-        if (!ps.prepare(c.n, c.wo, c.proxy)) continue;
-        for (int i = 0; i < 400; ++i) {
-          const Vec3 d = random_direction(rng);
-          const float p = ps.pdf(d), e = table->pdf(d);
-          if (p > 0 && e > 0) worst = std::min(worst, double(p) / e);
-        }
-      }
+      const double worst = worst_density_ratio(ps, *table, random_configs(40, 18), 22);
       if (r > 0)
         EXPECT_GE(worst, bound0 * (1 - 1e-4)) << name;
       else

@@ -13,6 +13,10 @@
 // Masses must be >= 0. Cells whose mass is 0 or NaN are never chosen. A distribution whose total is
 // not a positive normal float (all zero, NaN, Inf, or below FLT_MIN, whose reciprocal would overflow)
 // is not valid(): sample() and pmf() must not be used then.
+//
+// CumulativeDistribution2DView is the other storage: an n x n distribution kept as its running sums,
+// for distributions built once and sampled many times (the importance table's fine level keeps one
+// per cell, all in one array). Both of its searches are binary.
 #pragma once
 
 #include <algorithm>
@@ -103,6 +107,61 @@ inline DiscreteDistribution2D::Sample DiscreteDistribution2D::sample(Point2 u) c
   }
   s.offset.x = detail::clamp_unit((target - start) / row[s.x]);
   s.pmf = row[s.x] * inv_total_;
+  return s;
+}
+
+
+/// A view of an n x n distribution over external storage: its masses (n^2, row-major) and their
+/// normalized running sums in the layout build() writes: the n row ends first (the marginal, so the
+/// row search reads contiguous memory), then each row's first n - 1 running sums.
+class CumulativeDistribution2DView {
+ public:
+  using Sample = DiscreteDistribution2D::Sample;
+
+  /// Writes the running sums of n x n masses (>= 0) into cdf (n^2 floats); returns the masses' total.
+  /// A total of 0 writes uniform sums: such a distribution must never be chosen by a level above.
+  static double build(const float* masses, int n, float* cdf);
+
+  /// total: the masses' sum as build() returned it (0: every pmf is 0).
+  CumulativeDistribution2DView(const float* masses, const float* cdf, float total, int n)
+      : mass_(masses), cdf_(cdf), total_(total), n_(n) {}
+
+  /// A row with u.y among the row ends, then a cell of the row with u.x; u in [0,1)^2 (clamped).
+  Sample sample(Point2 u) const;
+  /// Probability of cell (x, y).
+  float pmf(int x, int y) const {
+    return total_ > 0 ? mass_[static_cast<std::size_t>(y) * n_ + x] / total_ : 0.0f;
+  }
+  /// The u that sample() maps to cell (x, y) and `offset`.
+  Point2 invert(int x, int y, Point2 offset) const;
+
+ private:
+  const float* mass_;
+  const float* cdf_;
+  float total_;
+  int n_;
+};
+
+inline CumulativeDistribution2DView::Sample CumulativeDistribution2DView::sample(Point2 u) const {
+  const float uy = detail::clamp_unit(u.y), ux = detail::clamp_unit(u.x);
+  const int n = n_;
+  Sample s;
+  s.y = static_cast<int>(std::min<long>(std::upper_bound(cdf_, cdf_ + n, uy) - cdf_, n - 1));
+  const float row_start = s.y > 0 ? cdf_[s.y - 1] : 0.0f;
+  const float row_end = cdf_[s.y];
+  const float row_mass = row_end - row_start;
+  s.offset.y = row_mass > 0 ? detail::clamp_unit((uy - row_start) / row_mass) : 0.5f;
+  const float target = row_start + ux * row_mass;
+  const float* row = cdf_ + n + static_cast<std::size_t>(s.y) * (n - 1);  // entries 0 .. n-2
+  s.x = static_cast<int>(std::upper_bound(row, row + (n - 1), target) - row);  // n - 1: the last column
+  if (s.x == n - 1 && !(row_end > target)) {  // rounding at the row's end: the last column with mass
+    while (s.x > 0 && (s.x == n - 1 ? row_end : row[s.x]) <= row[s.x - 1]) --s.x;
+  }
+  const float c0 = s.x > 0 ? row[s.x - 1] : row_start;
+  const float c1 = s.x < n - 1 ? row[s.x] : row_end;
+  const float mass = c1 - c0;
+  s.offset.x = mass > 0 ? detail::clamp_unit((target - c0) / mass) : 0.5f;
+  s.pmf = pmf(s.x, s.y);
   return s;
 }
 

@@ -158,9 +158,7 @@ class ImportanceTable {
   float pdf_in_cell(int c, Point2 p) const;
   /// Solid-angle density of a direction in a cell of probability cell_pmf whose density inside the
   /// cell (over the cell's area) is pdf_in_cell: a top cell covers 4 pi / T^2 steradians.
-  float solid_angle_pdf(float cell_pmf, float pdf_in_cell) const {
-    return cell_pmf * pdf_in_cell * float(T_) * float(T_) * kInv4Pi;
-  }
+  float solid_angle_pdf(float cell_pmf, float pdf_in_cell) const;
 
   /// Bytes held by the table.
   std::size_t bytes_used() const;
@@ -175,8 +173,10 @@ class ImportanceTable {
   friend detail::CellArrays detail::subcell_arrays(const ImportanceTable& table, int c);
   void build_levels(const std::vector<double>& subcell_sums);
   void build_cones();
-  struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell
-    int cell, sub, leaf;
+  struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell,
+    int cell, sub, leaf;  // texel (tx, ty) in the fine-level cell and the point inside that texel
+    int tx, ty;
+    Point2 in_texel;
   };
   Located locate(Point2 p) const;
 

@@ -197,13 +197,7 @@ TEST(Furnace, WhiteLambertAndClearDielectricSpheresAreInvisible) {
   s.add_material("glass", std::move(glass), true);
   s.add_sphere("white", {-1.2f, 0, 0}, 1.0f, 0);
   s.add_sphere("glass", {1.2f, 0, 0}, 1.0f, 1);
-  CameraSpec cam;
-  cam.from = {0, -20, 0};
-  cam.to = {0, 0, 0};
-  cam.vfov_degrees = 7.5f;
-  cam.width = 64;
-  cam.height = 32;
-  s.set_camera(cam);
+  s.set_camera(look_at({0, -20, 0}, {0, 0, 0}, 7.5f, 64, 32));
   s.set_environment(std::make_shared<const EnvironmentMap>(make_constant_environment({1, 1, 1})));
   s.commit();
   for (Strategy st : {Strategy::Bsdf, Strategy::Mis, Strategy::Product}) {
