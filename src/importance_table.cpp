@@ -187,7 +187,7 @@ void ImportanceTable::build_cones() {
 
 ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
   // The sub-cell first, and the top cell and texel from it, so that they always agree under rounding.
-  const int TS = T_ * S_, F = N_ / TS;
+  const int TS = T_ * S_, F = fine_->per_cell();
   const int lx = std::clamp(static_cast<int>(p.x * TS), 0, TS - 1);
   const int ly = std::clamp(static_cast<int>(p.y * TS), 0, TS - 1);
   const float fx = p.x * float(N_), fy = p.y * float(N_);
@@ -255,7 +255,7 @@ Vec3 square_to_sphere(Point2 p) {
 float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
   const Located at = locate(p);
   if (at.cell != c) return 0.0f;
-  const float F = float(N_ / (T_ * S_));
+  const float F = float(fine_->per_cell());
   return subcells(c).pmf(at.sub) * float(S_ * S_) * (fine_->cell(at.leaf).pmf(at.tx, at.ty) * F * F);
 }
 
@@ -271,7 +271,7 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
     ENVPIS_ASSERT(level.valid() && level.width() == S_);
     in = level.sample(cell.offset);
   }
-  const int TS = T_ * S_, F = N_ / TS, leaf = leaf_of(T_, S_, c, in.y * S_ + in.x);
+  const int TS = T_ * S_, F = fine_->per_cell(), leaf = leaf_of(T_, S_, c, in.y * S_ + in.x);
   const CumulativeDistribution2DView::Sample texel = fine_->cell(leaf).sample(in.offset);
   const TexelPoint at = texel_point(leaf, TS, F, texel);
   out.direction = square_to_sphere(at.p);
@@ -290,7 +290,7 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const Subc
   const float cell_pmf = top.pmf(at.cell);
   if (!(cell_pmf > 0)) return 0.0f;
   const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).pmf(at.sub) : 1.0f;
-  const float F = float(N_ / (T_ * S_));
+  const float F = float(fine_->per_cell());
   return solid_angle_pdf(cell_pmf, sub_pmf * float(S_ * S_) * (fine_->cell(at.leaf).pmf(at.tx, at.ty) * F * F));
 }
 
