@@ -190,15 +190,9 @@ ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
   const int TS = T_ * S_, F = fine_->per_cell();
   const int lx = std::clamp(static_cast<int>(p.x * TS), 0, TS - 1);
   const int ly = std::clamp(static_cast<int>(p.y * TS), 0, TS - 1);
-  const float fx = p.x * float(N_), fy = p.y * float(N_);
-  const int tx = std::clamp(static_cast<int>(fx), lx * F, lx * F + F - 1);
-  const int ty = std::clamp(static_cast<int>(fy), ly * F, ly * F + F - 1);
-  return {(ly / S_) * T_ + lx / S_,
-          (ly % S_) * S_ + lx % S_,
-          ly * TS + lx,
-          tx - lx * F,
-          ty - ly * F,
-          {detail::clamp_unit(fx - float(tx)), detail::clamp_unit(fy - float(ty))}};
+  const int tx = std::clamp(static_cast<int>(p.x * float(N_)), lx * F, lx * F + F - 1);
+  const int ty = std::clamp(static_cast<int>(p.y * float(N_)), ly * F, ly * F + F - 1);
+  return {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_, ly * TS + lx, tx - lx * F, ty - ly * F};
 }
 
 int ImportanceTable::cell_of(Point2 p) const { return locate(p).cell; }
@@ -298,7 +292,10 @@ Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d, const 
   if (empty_ || !top.valid() || !is_valid_direction(d)) return {0.5f, 0.5f};
   const Point2 p = equal_area_sphere_to_square(d);
   const Located at = locate(p);
-  Point2 offset = fine_->cell(at.leaf).invert(at.tx, at.ty, at.in_texel);
+  const int TS = T_ * S_, F = fine_->per_cell();
+  const Point2 in_texel{detail::clamp_unit(p.x * float(N_) - float((at.leaf % TS) * F + at.tx)),
+                        detail::clamp_unit(p.y * float(N_) - float((at.leaf / TS) * F + at.ty))};
+  Point2 offset = fine_->cell(at.leaf).invert(at.tx, at.ty, in_texel);
   if (S_ > 1) offset = (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).invert(at.sub % S_, at.sub / S_, offset);
   return top.invert(at.cell % T_, at.cell / T_, offset);
 }

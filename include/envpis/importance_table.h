@@ -174,9 +174,7 @@ class ImportanceTable {
   void build_levels(const std::vector<double>& subcell_sums);
   void build_cones();
   struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell,
-    int cell, sub, leaf;  // texel (tx, ty) in the fine-level cell and the point inside that texel
-    int tx, ty;
-    Point2 in_texel;
+    int cell, sub, leaf, tx, ty;  // texel (tx, ty) in the fine-level cell
   };
   Located locate(Point2 p) const;
 
