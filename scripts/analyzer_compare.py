@@ -30,11 +30,12 @@ def main():
     if len(sys.argv) < 3:
         sys.exit("usage: analyzer_compare.py DIR CONFIG...")
     directory, configs = sys.argv[1], sys.argv[2:]
-    runs = {}
-    for c in configs:
-        runs[c] = [json.load(open(os.path.join(directory, f"{m}-{c}.json"))) for m in MAPS
-                   if os.path.exists(os.path.join(directory, f"{m}-{c}.json"))]
-    maps = min(len(r) for r in runs.values())
+    # Only the maps every configuration has, so that each column pools the same points.
+    present = [m for m in MAPS if all(os.path.exists(os.path.join(directory, f"{m}-{c}.json")) for c in configs)]
+    if not present:
+        sys.exit("analyzer_compare.py: no map has a run of every configuration")
+    runs = {c: [json.load(open(os.path.join(directory, f"{m}-{c}.json"))) for m in present] for c in configs}
+    maps = len(present)
     objects = [o["name"] for o in runs[configs[0]][0]["objects"]]
     print(f"{maps} maps; V = Var / I^2 of one sample, geometric mean over the points\n")
     head = "| object | " + " | ".join(f"mis / product {c}" for c in configs) + " | " + \
