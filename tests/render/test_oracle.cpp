@@ -91,7 +91,7 @@ TEST(Oracle, PdfIsTheDensityOfItsSamples) {
 
 // The limit, by the analyzer: V(oracle) <= V(product) at every point, for the sharp, medium and broad
 // lobes, the diffuse and the glass sphere. It fails with mis_compensation off (the share alone loses
-// to the product under MIS at alpha 0.1 and 0.3) and, at alpha 0.02, with the table's environment-only
+// to the product under MIS at alpha 0.02 and 0.1) and, at alpha 0.02, with the table's environment-only
 // density inside the chosen cell instead of the cell's texels weighted by the product (the lobe is
 // smaller than a cell there, and the product sampler's 48 x 48 effective resolution is the oracle's).
 TEST(Oracle, IsALimitOfTheProductSampler) {
