@@ -22,6 +22,14 @@ constexpr int kTexelSide = 2;
 constexpr int kHorizonSide = 4;
 // At most this many points per side in one cell's refinement.
 constexpr int kMaxRefineSide = 32;
+// Share of a cell's texel distribution that follows the table's importance inside the cell: every
+// texel with importance keeps a light density, so no direction with radiance depends on the BSDF
+// sample alone, and a cell whose texels all weigh 0 (below the horizon, f = 0) is still a distribution.
+constexpr double kTexelMix = 0.01;
+
+// The weight under MIS compensation of a cell or a texel whose share of the estimated integral is
+// `share` and which the BSDF sample reaches with probability p_bsdf (or: both as densities).
+double compensated(double share, double p_bsdf) { return std::max(kKeep * share, 2 * share - p_bsdf); }
 
 float unit_from_bits(std::uint64_t bits) { return float(bits & 0xffffff) * 0x1p-24f; }
 // Two independent uniform numbers from a hash of the shading point's jitter and a key.
@@ -64,6 +72,7 @@ OracleSampler::OracleSampler(std::shared_ptr<const OracleCells> cells, const Ora
   bsdf_mass_.resize(n);
   weight_.resize(n);
   active_.reserve(n);
+  slot_.assign(n, -1);
 }
 
 OracleSampler::Point OracleSampler::evaluate(const ShadingContext& sc, Point2 sq, int c, float q, Rgb radiance,
@@ -116,6 +125,9 @@ void OracleSampler::estimate() {
 
 void OracleSampler::prepare(const ShadingContext& sc) {
   valid_ = false;
+  sc_ = sc;
+  for (int c : built_) slot_[static_cast<std::size_t>(c)] = -1;
+  built_.clear();
   const ImportanceTable& t = cells_->table();
   if (t.empty()) return;
   const int cells = t.cell_count();
@@ -181,6 +193,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
     for (int c : active_) total += cell_sum_[static_cast<std::size_t>(c)];
   }
   if (!(total > 0)) return;
+  total_ = total;
   float* weight = top_.values();
   std::fill(weight, weight + top_.padded_size(), 0.0f);
   // The weights. With compensation (the light sample is combined with a BSDF sample by MIS): one
@@ -193,7 +206,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
   for (int c : active_) {
     const std::size_t i = static_cast<std::size_t>(c);
     const double share = cell_sum_[i] / total;
-    weight_[i] = compensate ? std::max(kKeep * share, 2 * share - bsdf_mass_[i]) : share;
+    weight_[i] = compensate ? compensated(share, bsdf_mass_[i]) : share;
   }
   double sum = 0;
   for (int c : active_) sum += weight_[static_cast<std::size_t>(c)];
@@ -204,10 +217,83 @@ void OracleSampler::prepare(const ShadingContext& sc) {
   valid_ = top_.valid();
 }
 
-DirectionSample OracleSampler::sample(Point2 u) const {
-  return valid_ ? cells_->table().sample(top_, u) : DirectionSample{};
+// The weights of cell c's texels: each texel's share density of g at its centre (the texel's mean
+// radiance), compensated for MIS as the cells are, mixed with the table's importance inside the cell.
+void OracleSampler::texel_weights(int c, float* out) const {
+  const ImportanceTable& t = cells_->table();
+  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
+  const int x0 = (c % T) * F, y0 = (c / T) * F;
+  const bool skip_below = sc_.opaque || sc_.bsdf->closed_surface();
+  const bool compensate = options_.mis_compensation;
+  const double inv_total = 1.0 / total_;
+  const float inv_n = 1.0f / float(N);
+  double w_sum = 0, q_sum = 0;
+  for (int y = 0; y < F; ++y)
+    for (int x = 0; x < F; ++x) {
+      const Vec3 wl = sc_.frame->to_local(
+          equal_area_square_to_sphere({(float(x0 + x) + 0.5f) * inv_n, (float(y0 + y) + 0.5f) * inv_n}));
+      double w = 0;
+      if (!skip_below || wl.z > 0) {
+        const Rgb f = sc_.bsdf->eval(sc_.wo_local, wl);
+        const double g = double((f * cells_->radiance(c, x, y)).average()) * std::fabs(wl.z) * inv_total;
+        w = compensate ? compensated(g, double(sc_.bsdf->pdf(sc_.wo_local, wl))) : g;
+        if (!(w > 0) || !std::isfinite(w)) w = 0;
+      }
+      out[y * F + x] = static_cast<float>(w);
+      w_sum += w;
+      q_sum += double(t.importance(x0 + x, y0 + y));
+    }
+  const double delta = w_sum > 0 && std::isfinite(w_sum) ? kTexelMix : 1.0;
+  const double a = delta < 1 ? (1 - delta) / w_sum : 0.0, b = q_sum > 0 ? delta / q_sum : 0.0;
+  for (int y = 0; y < F; ++y)
+    for (int x = 0; x < F; ++x)
+      out[y * F + x] = static_cast<float>(a * double(out[y * F + x]) + b * double(t.importance(x0 + x, y0 + y)));
 }
 
-float OracleSampler::pdf(Vec3 wi) const { return valid_ ? cells_->table().pdf(top_, wi) : 0.0f; }
+const DiscreteDistribution2D& OracleSampler::texels(int c) const {
+  int& slot = slot_[static_cast<std::size_t>(c)];
+  if (slot < 0) {
+    slot = static_cast<int>(built_.size());
+    built_.push_back(c);
+    const int F = cells_->table().cell_resolution();
+    if (pool_.size() <= static_cast<std::size_t>(slot)) pool_.emplace_back(F, F);
+    texel_weights(c, pool_[static_cast<std::size_t>(slot)].values());
+    pool_[static_cast<std::size_t>(slot)].update();
+  }
+  return pool_[static_cast<std::size_t>(slot)];
+}
+
+DirectionSample OracleSampler::sample(Point2 u) const {
+  if (!valid_) return {};
+  const ImportanceTable& t = cells_->table();
+  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
+  const DiscreteDistribution2D::Sample s = top_.sample(u);
+  const int c = s.y * T + s.x;
+  const DiscreteDistribution2D& d = texels(c);
+  if (!(s.pmf > 0) || !d.valid()) return {};
+  const DiscreteDistribution2D::Sample e = d.sample(s.offset);
+  const float inv_n = 1.0f / float(N);
+  DirectionSample r;
+  r.direction = equal_area_square_to_sphere({(float(s.x * F + e.x) + e.offset.x) * inv_n,
+                                             (float(s.y * F + e.y) + e.offset.y) * inv_n});
+  r.pdf = s.pmf * e.pmf * float(N) * float(N) * kInv4Pi;
+  r.cell = c;
+  return r;
+}
+
+float OracleSampler::pdf(Vec3 wi) const {
+  if (!valid_ || !is_valid_direction(wi)) return 0.0f;
+  const ImportanceTable& t = cells_->table();
+  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
+  const Point2 p = equal_area_sphere_to_square(wi);
+  const int c = t.cell_of(p);
+  const float pc = top_.pmf(c);
+  if (!(pc > 0)) return 0.0f;
+  const DiscreteDistribution2D& d = texels(c);
+  if (!d.valid()) return 0.0f;
+  const int x = std::clamp(static_cast<int>(p.x * float(N)) - (c % T) * F, 0, F - 1);
+  const int y = std::clamp(static_cast<int>(p.y * float(N)) - (c / T) * F, 0, F - 1);
+  return pc * d.pmf(x, y) * float(N) * float(N) * kInv4Pi;
+}
 
 }  // namespace envpis::render

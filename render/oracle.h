@@ -1,9 +1,17 @@
 // The oracle light distribution: a per-shading-point top level over the cells of a fine light table
 // (48 x 48 by default), each weighted from an estimate of its true share of the integrand
-// g = BSDF x |cos| x radiance (channel average), and inside the chosen cell the table's own fine
-// density. It is the paper's two-level scheme with a (nearly) perfect top level: the analyzer's
-// exact-T limit (docs/analyzer.md), made usable in a renderer, and the limit the product sampler's
-// top level is measured against (docs/analyzer.md, "The oracle").
+// g = BSDF x |cos| x radiance (channel average), and inside the chosen cell a distribution over the
+// cell's fine texels weighted by g itself. It is the limit the product sampler is measured against
+// (docs/analyzer.md, "The oracle"): the paper's two-level scheme with a (nearly) perfect top level,
+// and a product, not the environment alone, inside the cell.
+//
+// Why the texels: a lobe narrower than a cell (GGX alpha 0.02 is a few degrees, a 48 x 48 cell about
+// four) fills a small part of its cell, and the environment's density inside the cell puts most
+// light samples where the BSDF is nearly 0; the product sampler, whose sub-cells give it the same
+// 48 x 48 resolution, then did better at that roughness. Weighting each texel by g at its centre
+// (with the texel's mean radiance) follows the lobe down to the table's resolution. It costs one BSDF
+// evaluation and pdf per texel of every cell that sample() or pdf() visits, built on first use after
+// prepare() and kept until the next.
 //
 // The share of a cell, the integral of g over it, is estimated per shading point by two techniques
 // combined with the balance heuristic:
@@ -23,12 +31,17 @@
 // densities sum to a multiple of g, so each cell gets max(share / 4, 2 share - P_bsdf(cell)), with
 // P_bsdf(cell) estimated by the same points (the compensation of Karlik et al. 2019, per cell).
 //
-// Unbiased whatever the estimates: pdf() is exactly the density sample() draws from (the table's
-// two levels with this top level), and every cell a light sample can use keeps at least 1e-3 of its
-// environment share, so no direction with radiance depends on BSDF samples alone.
+// The texels are weighted by the same rule, per texel: max(g / 4, 2 g - p_bsdf), g as a share density
+// of the estimated integral and p_bsdf the BSDF sample's density at the texel's centre.
+//
+// Unbiased whatever the estimates: pdf() is exactly the density sample() draws from (piecewise
+// constant on the table's texels), every cell a light sample can use keeps at least 1e-3 of its
+// environment share, and inside a cell a small part of the probability follows the table's
+// importance, so no direction with radiance depends on BSDF samples alone.
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <vector>
 
@@ -60,8 +73,9 @@ class OracleCells {
   std::vector<Rgb> radiance_;  // per fine texel, cell-major
 };
 
-/// Per-thread oracle distribution (not thread-safe). prepare() costs a few thousand BSDF and
-/// environment evaluations (OracleOptions), sample() and pdf() are those of the table's two levels.
+/// Per-thread oracle distribution (not thread-safe, not even its const sample() and pdf(), which fill
+/// a cache). prepare() costs a few thousand BSDF and environment evaluations (OracleOptions); the
+/// first sample() or pdf() in a cell costs a BSDF evaluation and pdf per texel of the cell.
 class OracleSampler {
  public:
   OracleSampler(std::shared_ptr<const OracleCells> cells, const OracleOptions& options);
@@ -81,6 +95,8 @@ class OracleSampler {
   void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k points in cell c
   Point evaluate(const ShadingContext& sc, Point2 p, int c, float q, Rgb radiance, bool skip_below) const;
   void estimate();  // cell_sum_ from points_ and count_
+  void texel_weights(int c, float* out) const;  // cell c's F x F texel weights
+  const DiscreteDistribution2D& texels(int c) const;  // cell c's texel distribution, built on first use
 
   std::shared_ptr<const OracleCells> cells_;
   OracleOptions options_;
@@ -93,6 +109,12 @@ class OracleSampler {
   std::vector<double> bsdf_mass_;  // per cell: the estimate of the BSDF sample's probability to land in it
   std::vector<double> weight_;     // per cell: its weight before normalization and the floor
   bool valid_ = false;
+  ShadingContext sc_;   // the prepared shading point (its frame and material outlive sample and pdf)
+  double total_ = 0;    // the estimate of the integral of g over the sphere
+  // The texel distributions of the cells sample() or pdf() used since prepare(): cell -> slot in pool_.
+  mutable std::vector<int> slot_;
+  mutable std::vector<int> built_;
+  mutable std::deque<DiscreteDistribution2D> pool_;
 };
 
 }  // namespace envpis::render

@@ -10,7 +10,7 @@
 //   product   the library's ProductSampler (environment x BSDF proxy) + BSDF sampling, MIS.
 //   oracle    a per-shading-point top level over the cells of a finer table (48 x 48 by default)
 //             weighted by each cell's estimated true share of BSDF * |cos| * radiance, then the
-//             table's fine distribution inside the chosen cell; + BSDF sampling, MIS
+//             cell's fine texels weighted by the same product; + BSDF sampling, MIS
 //             (render/oracle.h). Slow: the limit the paper's two-level method approaches.
 //
 // Tables (StrategyTables) are built once per environment and strategy and shared by all threads;
