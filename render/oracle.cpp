@@ -94,7 +94,7 @@ void OracleSampler::light_points(const ShadingContext& sc, int c, int k, int pas
   const ImportanceTable& t = cells_->table();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
   const float inv_n = 1.0f / float(N), inv_k = 1.0f / float(k);
-  const float to_solid_angle = float(N) * float(N) * kInv4Pi;
+  const float to_solid_angle = t.solid_angle_pdf(1.0f, float(F) * float(F));  // a fine texel: 4 pi / N^2 sr
   const bool skip_below = sc.opaque || sc.bsdf->closed_surface();
   const int x0 = (c % T) * F, y0 = (c / T) * F;
   // Every cell and pass its own random offset of the k x k strata.
@@ -132,7 +132,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
   if (t.empty()) return;
   const int cells = t.cell_count();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
-  const float to_solid_angle = float(N) * float(N) * kInv4Pi;  // a fine texel covers 4 pi / N^2 sr
+  const float to_solid_angle = t.solid_angle_pdf(1.0f, float(F) * float(F));  // a fine texel: 4 pi / N^2 sr
   // Directions below the surface carry nothing a light sample can use: for reflection-only materials
   // (f = 0 there), and for closed surfaces, whose local -Z is the inside of the object: a shadow ray
   // into it is always blocked (Material::set_closed_surface; the product proxy leaves out the same
@@ -276,7 +276,7 @@ DirectionSample OracleSampler::sample(Point2 u) const {
   DirectionSample r;
   r.direction = equal_area_square_to_sphere({(float(s.x * F + e.x) + e.offset.x) * inv_n,
                                              (float(s.y * F + e.y) + e.offset.y) * inv_n});
-  r.pdf = s.pmf * e.pmf * float(N) * float(N) * kInv4Pi;
+  r.pdf = t.solid_angle_pdf(s.pmf, e.pmf * float(F) * float(F));
   r.cell = c;
   return r;
 }
@@ -293,7 +293,7 @@ float OracleSampler::pdf(Vec3 wi) const {
   if (!d.valid()) return 0.0f;
   const int x = std::clamp(static_cast<int>(p.x * float(N)) - (c % T) * F, 0, F - 1);
   const int y = std::clamp(static_cast<int>(p.y * float(N)) - (c / T) * F, 0, F - 1);
-  return pc * d.pmf(x, y) * float(N) * float(N) * kInv4Pi;
+  return t.solid_angle_pdf(pc, d.pmf(x, y) * float(F) * float(F));
 }
 
 }  // namespace envpis::render

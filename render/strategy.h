@@ -42,7 +42,7 @@ const char* to_string(Heuristic h);
 /// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).
 struct OracleOptions {
   int resolution = 48;        ///< top-level cells per side of the oracle's table (1..256)
-  int directions = 1;         ///< first-pass points per cell: a square number (1, 4, 9, ..., 256)
+  int directions = 4;         ///< first-pass points per cell: a square number (1, 4, 9, ..., 256)
   int bsdf_samples = 256;     ///< BSDF samples per shading point that find the lobe: a square number (0..65536)
   int refine_points = 1024;   ///< second-pass points, shared by the cells by their first estimate (0..1e6)
   /// Weight the cells for MIS with the BSDF sample (what the renderer does) rather than by their share

@@ -40,7 +40,7 @@ for map in $MAPS; do
   echo "paper-table: $name"
   "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$map" --integrator direct \
     --strategies "$STRATEGIES" --seeds "$SEEDS" --sampler "$SAMPLER" --spp "$SPP" --ref-spp "$REF_SPP" --equal-time auto \
-    --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs 1 --no-convergence \
+    --width "$WIDTH" --height "$HEIGHT" --oracle-res "$ORACLE_RES" --oracle-dirs "${ORACLE_DIRS:-4}" --no-convergence \
     --quiet --out "$OUT/$name" "${EXTRA_ARGS[@]}" | sed 's/^/  /'
 done
 "$PY" scripts/paper_table.py "$OUT"/*/metrics.json > "$OUT/table.md"
