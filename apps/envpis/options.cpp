@@ -140,6 +140,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product with --subcells > 1: the heaviest top cells (up to this many, 0..64) re-weighed from "
                  "their sub-cells in prepare (default: the library's, 0)")
       ->type_name("K");
+  sub.add_option("--cell-estimate", cell_estimate,
+                 "product: how a cell's proxy value is estimated: cone (the paper's, the lobes at the cell's "
+                 "bounding cone) or moments (at its importance-weighted mean direction; "
+                 "docs/refinement.md) (default: the library's)")
+      ->type_name("cone|moments");
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -187,6 +192,13 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   o.product.refine = o.light_table.subdivision > 1;
   if (!refine_cells.empty())
     o.product.refine_cells = static_cast<int>(parse_integer("--refine-cells", refine_cells, 0, 64));
+  if (!cell_estimate.empty()) {
+    try {
+      o.product.cell_estimate = parse_cell_estimate(cell_estimate);
+    } catch (const Error& e) {
+      throw Error(std::string("--cell-estimate: ") + e.what());
+    }
+  }
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for
