@@ -121,7 +121,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--proxy-transform", proxy_transform, "product: proxy roughness transform (default: the library's)")
       ->type_name("T");
   sub.add_option("--proxy-min-alpha", proxy_min_alpha,
-                 "product: floor on the transformed proxy roughness, [0, 1] (default: the library's)")
+                 "product: floor on the transformed proxy roughness, [0, 1] (default: 0.2 with --cell-estimate "
+                 "moments, else the library's, 0.35)")
       ->type_name("FLOAT");
   sub.add_option("--closed-surfaces", closed_surfaces,
                  "product and oracle: leave out light samples into closed transmissive objects (default: the "
@@ -199,6 +200,9 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   } catch (const Error& e) {
     throw Error(std::string("--cell-estimate: ") + e.what());
   }
+  // The roughness floor was the cone's remedy (a narrow lobe gives its peak to every cell its cone
+  // reaches); with moments a lower one pays under MIS (docs/refinement.md), unless --proxy-min-alpha.
+  if (proxy_min_alpha.empty() && o.product.cell_estimate == CellEstimate::Moments) o.product.proxy.min_alpha = 0.2f;
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for
