@@ -118,6 +118,44 @@ void BM_ProductPrepareAndSample_Refined(benchmark::State& state) {
 void BM_ProductPrepareAndSample_Scalar(benchmark::State& s) { product_prepare_and_sample(s, false); }
 void BM_ProductPrepareAndSample_SIMD(benchmark::State& s) { product_prepare_and_sample(s, true); }
 
+// The cells estimated from their moments (CellEstimate::Moments) instead of their cones: the paper's
+// one-level product, and the refined one with refine_cells 0.
+void BM_ProductPrepareAndSample_SIMD_Moments(benchmark::State& state) {
+  ProductSamplerOptions opt;
+  opt.simd = bench_simd();
+  opt.cell_estimate = CellEstimate::Moments;
+  product_prepare_and_sample(state, sunset_table(), opt, to_string(bench_simd()));
+}
+void BM_ProductPrepareAndSample_Refined_Moments(benchmark::State& state) {
+  ProductSamplerOptions opt;
+  opt.simd = bench_simd();
+  opt.refine = true;
+  opt.cell_estimate = CellEstimate::Moments;
+  product_prepare_and_sample(state, sunset_table_subcells(), opt, to_string(bench_simd()));
+}
+
+// The weights kernel alone with the moments estimate (the widest set).
+void BM_ProductWeights_KernelBest_Moments(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table();
+  const auto& pts = shading_points();
+  std::vector<detail::LobeParams> lobes(kRing);
+  for (std::size_t j = 0; j < kRing; ++j) {
+    lobes[j] = detail::to_lobe_params(prepare_proxy(pts[j].proxy, pts[j].n, pts[j].wo));
+    lobes[j].moments = 1;
+  }
+  const detail::Kernels& k = detail::kernels_for(bench_simd());
+  const detail::CellArrays cells = detail::cell_arrays(table);
+  std::vector<float> out(cells.padded_count);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    k.product_weights(cells, lobes[i++ & kMask], out.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.SetLabel(k.name);
+  table_counters(state, table);
+}
+
 // ---- sampling from prepared distributions (64 different shading points, cycled) ----
 
 constexpr std::size_t kSamplers = 64;
@@ -190,6 +228,9 @@ BENCHMARK(BM_PrepareProxy);
 BENCHMARK(BM_ProductPrepareAndSample_Scalar);
 BENCHMARK(BM_ProductPrepareAndSample_SIMD);
 BENCHMARK(BM_ProductPrepareAndSample_Refined)->ArgName("refine_cells")->Arg(0)->Arg(8);
+BENCHMARK(BM_ProductPrepareAndSample_SIMD_Moments);
+BENCHMARK(BM_ProductPrepareAndSample_Refined_Moments);
+BENCHMARK(BM_ProductWeights_KernelBest_Moments);
 BENCHMARK(BM_ProductSample);
 BENCHMARK(BM_ProductPdf);
 BENCHMARK(BM_EnvSample);

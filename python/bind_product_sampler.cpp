@@ -53,6 +53,12 @@ void bind_product_sampler(py::module_& m) {
       .def_readwrite("refine_cells", &ProductSamplerOptions::refine_cells,
                      "with refine: the heaviest top cells re-weighed from their sub-cells in prepare(), 0..64")
       .def_property(
+          "cell_estimate",
+          [](const ProductSamplerOptions& o) { return std::string(envpis::to_string(o.cell_estimate)); },
+          [](ProductSamplerOptions& o, const std::string& name) { o.cell_estimate = envpis::parse_cell_estimate(name); },
+          "how a cell's proxy value is estimated: 'cone' (default, the paper's) or 'moments' (at the cell's "
+          "importance-weighted mean direction)")
+      .def_property(
           "simd", [](const ProductSamplerOptions& o) { return std::string(envpis::to_string(o.simd)); },
           [](ProductSamplerOptions& o, const std::string& name) { o.simd = envpis::parse_simd(name); },
           "instruction set of the weights kernel: 'best' (default), 'scalar', 'sse2', 'avx2' or 'avx512'");

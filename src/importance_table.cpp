@@ -64,6 +64,7 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   empty_ = !(integral_ > 0);
   build_levels(fine->build());
   build_cones();
+  build_moments(*fine);
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -150,7 +151,7 @@ Cone bounding_cone(int T, int cx, int cy) {
 }  // namespace
 
 namespace {
-void store_cone(std::vector<float> (&soa)[6], std::size_t i, const Cone& cone) {
+void store_cone(std::vector<float> (&soa)[10], std::size_t i, const Cone& cone) {
   soa[0][i] = cone.axis.x;
   soa[1][i] = cone.axis.y;
   soa[2][i] = cone.axis.z;
@@ -158,9 +159,10 @@ void store_cone(std::vector<float> (&soa)[6], std::size_t i, const Cone& cone) {
   soa[4][i] = cone.sin_half_angle;
 }
 // Padding entries: probability 0 and a cone that evaluates harmlessly.
-void store_padding(std::vector<float> (&soa)[6], std::size_t i) {
+void store_padding(std::vector<float> (&soa)[10], std::size_t i) {
   soa[2][i] = 1.0f;
   soa[3][i] = 1.0f;
+  soa[8][i] = 1.0f;
 }
 }  // namespace
 
@@ -182,6 +184,77 @@ void ImportanceTable::build_cones() {
     const std::size_t base = static_cast<std::size_t>(c) * sub_stride_;
     for (int s = 0; s < per; ++s) store_cone(sub_soa_, base + s, subcell_cone(c, s));
     for (int s = per; s < sub_stride_; ++s) store_padding(sub_soa_, base + s);
+  }
+}
+
+namespace {
+// The fine-level cell (a sub-cell) of sub-cell s of top cell c.
+int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S) + (c % T) * S + s % S; }
+}  // namespace
+
+namespace {
+// Sums over a fine-level cell's texel centres d: importance-weighted (v d, v) and plain (d, count).
+struct DirectionSums {
+  double v[3] = {0, 0, 0}, w = 0, d[3] = {0, 0, 0}, n = 0;
+  void add(const DirectionSums& o) {
+    for (int k = 0; k < 3; ++k) v[k] += o.v[k], d[k] += o.d[k];
+    w += o.w;
+    n += o.n;
+  }
+};
+
+// The cell's mean direction (normalized) and spread 1 - |mean| into entry i of `soa`; importance
+// weighted, or uniform where the cell has no importance (a compensated table's dark cells).
+void store_moments(std::vector<float> (&soa)[10], std::size_t i, const DirectionSums& s) {
+  const bool weighted = s.w > 0;
+  const double* m = weighted ? s.v : s.d;
+  const double total = weighted ? s.w : s.n;
+  const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+  if (!(len > 0) || !(total > 0)) {  // a cell symmetric about the centre (T = 1): no direction
+    soa[8][i] = 1.0f;
+    soa[9][i] = 1.0f;
+    return;
+  }
+  for (int k = 0; k < 3; ++k) soa[6 + k][i] = static_cast<float>(m[k] / len);
+  soa[9][i] = static_cast<float>(std::clamp(1.0 - len / total, 0.0, 1.0));
+}
+}  // namespace
+
+// Per top cell and sub-cell: the importance-weighted mean direction and spread (the product sampler's
+// CellEstimate::Moments), from every fine texel's centre.
+void ImportanceTable::build_moments(const detail::FineLevel& fine) {
+  const int TS = T_ * S_, P = fine.per_cell(), cells = T_ * T_, per = S_ * S_;
+  const std::vector<float>& values = fine.values();
+  const detail::Kernels& k = detail::kernels_for(Simd::Best);
+  std::vector<DirectionSums> leaf(static_cast<std::size_t>(TS) * TS);
+  detail::parallel_for(0, TS, [&](int begin, int end) {
+    std::vector<float> u(P), v(P), x(P), y(P), z(P);
+    for (int ly = begin; ly < end; ++ly)
+      for (int lx = 0; lx < TS; ++lx) {
+        DirectionSums& s = leaf[static_cast<std::size_t>(ly) * TS + lx];
+        for (int j = 0; j < P; ++j) {
+          const int ty = ly * P + j;
+          for (int i = 0; i < P; ++i) {
+            u[i] = (float(lx * P + i) + 0.5f) / float(N_);
+            v[i] = (float(ty) + 0.5f) / float(N_);
+          }
+          k.square_to_sphere(P, u.data(), v.data(), x.data(), y.data(), z.data());
+          for (int i = 0; i < P; ++i) {
+            const double w = values[fine.index(lx * P + i, ty)];
+            s.v[0] += w * x[i], s.v[1] += w * y[i], s.v[2] += w * z[i], s.w += w;
+            s.d[0] += x[i], s.d[1] += y[i], s.d[2] += z[i], s.n += 1;
+          }
+        }
+      }
+  });
+  for (int c = 0; c < cells; ++c) {
+    DirectionSums cell;
+    for (int s = 0; s < per; ++s) {
+      const DirectionSums& l = leaf[static_cast<std::size_t>(leaf_of(T_, S_, c, s))];
+      cell.add(l);
+      if (sub_stride_ > 0) store_moments(sub_soa_, static_cast<std::size_t>(c) * sub_stride_ + s, l);
+    }
+    store_moments(soa_, c, cell);
   }
 }
 
@@ -207,9 +280,6 @@ float ImportanceTable::solid_angle_pdf(float cell_pmf, float pdf_in_cell) const 
 }
 
 namespace {
-// The fine-level cell (a sub-cell) of sub-cell s of top cell c.
-int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S) + (c % T) * S + s % S; }
-
 struct TexelPoint {
   Point2 p;
   bool interior;  // far enough inside its texel that locate(p) finds this texel again
@@ -302,14 +372,15 @@ Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d, const 
 
 detail::CellArrays detail::cell_arrays(const ImportanceTable& t) {
   const auto& a = t.soa_;
-  return {a[0].data(), a[1].data(), a[2].data(), a[3].data(), a[4].data(), a[5].data(), t.top_.padded_size()};
+  return {a[0].data(), a[1].data(), a[2].data(), a[3].data(), a[4].data(), a[5].data(),
+          a[6].data(), a[7].data(), a[8].data(), a[9].data(), t.top_.padded_size()};
 }
 
 detail::CellArrays detail::subcell_arrays(const ImportanceTable& t, int c) {
   const std::size_t o = static_cast<std::size_t>(c) * t.sub_stride_;
   const auto& a = t.sub_soa_;
   return {a[0].data() + o, a[1].data() + o, a[2].data() + o, a[3].data() + o, a[4].data() + o, a[5].data() + o,
-          t.sub_stride_};
+          a[6].data() + o, a[7].data() + o, a[8].data() + o, a[9].data() + o, t.sub_stride_};
 }
 
 std::size_t ImportanceTable::bytes_used() const {

@@ -22,6 +22,10 @@ struct CellArrays {
   const float* cosb;  ///< cos / sin of the cone half-angle
   const float* sinb;
   const float* prob;  ///< environment probability of the cell (sums to 1)
+  const float* mx;    ///< the cell's importance-weighted mean direction, normalized
+  const float* my;
+  const float* mz;
+  const float* spread;  ///< 1 - length of the unnormalized mean (its angular spread: E[1 - cos])
   int padded_count;
 };
 
@@ -32,9 +36,15 @@ struct CellArrays {
 ///   refraction  ct / (1 + mt cos^2 t_T)^2   for cos t_T > 0
 /// where each t is the angle from the lobe axis to the closest direction of the cell's cone;
 /// reflection and diffuse need the cell to reach above the horizon, refraction and translucent below.
+///
+/// With `moments` set, each lobe is evaluated instead at the cell's importance-weighted mean direction
+/// (CellEstimate::Moments in envpis/product_sampler.h): the glossy lobes as above at that direction, the
+/// cosine lobes as kd * E[max(0, N.w)] over the cell (a smooth maximum of the mean N.w and its spread);
+/// the cone only gates the horizon.
 struct LobeParams {
   float n[3], r[3], t[3];
   float kd, kt, cr, mr, ct, mt;
+  int moments;  ///< 0: the cone-closest direction (the paper's), 1: the mean direction
 };
 
 using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);

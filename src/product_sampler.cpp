@@ -2,12 +2,29 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "envpis/equal_area.h"
 #include "kernels.h"
 #include "proxy_internal.h"
 
 namespace envpis {
+
+const char* to_string(CellEstimate e) { return e == CellEstimate::Moments ? "moments" : "cone"; }
+
+CellEstimate parse_cell_estimate(const std::string& s) {
+  if (s == "cone") return CellEstimate::Cone;
+  if (s == "moments") return CellEstimate::Moments;
+  throw Error("unknown cell estimate '" + s + "' (cone, moments)");
+}
+
+namespace {
+detail::LobeParams lobe_params(const PreparedProxy& proxy, CellEstimate estimate) {
+  detail::LobeParams l = detail::to_lobe_params(proxy);
+  l.moments = estimate == CellEstimate::Moments;
+  return l;
+}
+}  // namespace
 
 ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSamplerOptions& options)
     : table_(&table), options_(options), top_(table.top_resolution(), table.top_resolution()) {
@@ -42,7 +59,7 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   float sum = 0;
   bool seen = false;
   if (prepared_.valid()) {
-    kernels_->product_weights(detail::cell_arrays(*table_), detail::to_lobe_params(prepared_), prob);
+    kernels_->product_weights(detail::cell_arrays(*table_), lobe_params(prepared_, options_.cell_estimate), prob);
     if (refine_) reestimate_heaviest_cells();
     sum = top_.update();
     seen = top_.valid();
@@ -78,7 +95,7 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
 // sub-cells, and `out` then holds the environment's shares.
 float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
   const detail::CellArrays cells = detail::subcell_arrays(*table_, c);
-  kernels_->product_weights(cells, detail::to_lobe_params(prepared_), out.values());
+  kernels_->product_weights(cells, lobe_params(prepared_, options_.cell_estimate), out.values());
   const float sum = out.update();
   const int n = table_->subdivision() * table_->subdivision();
   float* w = out.values();

@@ -18,6 +18,7 @@ inline LobeParams to_lobe_params(const PreparedProxy& p) {
   l.mr = a2r - 1.0f;
   l.ct = p.wt * a2t * kInvPi;
   l.mt = a2t - 1.0f;
+  l.moments = 0;
   return l;
 }
 

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <experimental/simd>
 
+#include "envpis/common.h"
 #include "kernels.h"
 #include "simd_ops.h"
 
@@ -32,6 +33,14 @@ ENVPIS_INLINE V ggx_like(V c, V coef, V m) {
   const V cp = vmax(c, V(0.0f));
   const V d = V(1.0f) + m * cp * cp;  // >= a'^2 >= 1e-6
   return coef * vrcp_fast(d * d);
+}
+
+/// E[max(0, X)] for X with mean m and variance v, as the smooth maximum (m + sqrt(m^2 + 2 v / pi)) / 2:
+/// exact for |m| >> sqrt(v) and at m = 0 for a normal X, never 0 while v > 0 (a cell straddling the
+/// horizon keeps a weight even when its mean is below it).
+template <class V>
+ENVPIS_INLINE V mean_positive_part(V m, V v) {
+  return V(0.5f) * (m + vsqrt_fast(m * m + v));
 }
 
 /// LobeParams broadcast to V.
@@ -72,29 +81,70 @@ ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb
   return value;
 }
 
-template <class V, bool kTransmission, bool kDiffuse>
+/// The proxy's estimate for a cell from its moments (LobeParams::moments): the glossy lobes at the cell's
+/// importance-weighted mean direction m (unit), the cosine lobes as the mean of max(0, cos) over the cell
+/// from m and the cell's spread s = E[1 - w.m]. The cone (axis a, sine of its half-angle sb) only decides
+/// which side of the surface the cell reaches, with the same gates as proxy_cone_value, and no lobe is 0
+/// where it passes them, so the two estimates are positive for exactly the same cells.
+template <class V, bool kTransmission = true, bool kDiffuse = true>
+ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V mx, V my, V mz, V spread) {
+  const V cn = l.nx * ax + l.ny * ay + l.nz * az;
+  V value = ggx_like(l.rx * mx + l.ry * my + l.rz * mz, l.cr, l.mr);
+  V mean_cos(0.0f), var_cos(0.0f);
+  if constexpr (kDiffuse) {
+    // N.w over the cell: mean (1 - s) N.m exactly (N.w is linear in w); variance about s sin^2(N, m)
+    // (s is the per-axis angular variance, taken along the direction in which N.w changes), plus a
+    // little so that it is never 0.
+    const V cm = l.nx * mx + l.ny * my + l.nz * mz;
+    mean_cos = (V(1.0f) - spread) * cm;
+    var_cos = V(2.0f * kInvPi) * spread * vmax(V(1.0f) - cm * cm, V(0.0f)) + V(1e-6f);
+    value = value + l.kd * mean_positive_part(mean_cos, var_cos);
+  }
+  value = select(cn > -sb, value, V(0.0f));
+  if constexpr (kTransmission) {
+    V below = ggx_like(l.tx * mx + l.ty * my + l.tz * mz, l.ct, l.mt);
+    if constexpr (kDiffuse) below = below + l.kt * mean_positive_part(-mean_cos, var_cos);
+    value = value + select(cn < sb, below, V(0.0f));
+  }
+  return value;
+}
+
+template <class V, bool kTransmission, bool kDiffuse, bool kMoments>
 ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
   constexpr std::size_t W = lanes<V>();
   const LobeV<V> l(p);
   for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
-    const V value = proxy_cone_value<V, kTransmission, kDiffuse>(
-        l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
-        load_any<V>(cells.cosb + i), load_any<V>(cells.sinb + i));
+    V value;
+    if constexpr (kMoments)
+      value = proxy_moment_value<V, kTransmission, kDiffuse>(
+          l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
+          load_any<V>(cells.sinb + i), load_any<V>(cells.mx + i), load_any<V>(cells.my + i),
+          load_any<V>(cells.mz + i), load_any<V>(cells.spread + i));
+    else
+      value = proxy_cone_value<V, kTransmission, kDiffuse>(
+          l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
+          load_any<V>(cells.cosb + i), load_any<V>(cells.sinb + i));
     store(value * load_any<V>(cells.prob + i), out + i);
+  }
+}
+
+template <class V, bool kMoments>
+ENVPIS_INLINE void product_weights_lobes(const CellArrays& cells, const LobeParams& p, float* out) {
+  const bool transmission = p.kt > 0.0f || p.ct > 0.0f;
+  const bool diffuse = p.kd > 0.0f || p.kt > 0.0f;
+  if (transmission) {
+    if (diffuse) product_weights_impl<V, true, true, kMoments>(cells, p, out);
+    else product_weights_impl<V, true, false, kMoments>(cells, p, out);
+  } else {
+    if (diffuse) product_weights_impl<V, false, true, kMoments>(cells, p, out);
+    else product_weights_impl<V, false, false, kMoments>(cells, p, out);
   }
 }
 
 template <class V>
 __attribute__((flatten)) void product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
-  const bool transmission = p.kt > 0.0f || p.ct > 0.0f;
-  const bool diffuse = p.kd > 0.0f || p.kt > 0.0f;
-  if (transmission) {
-    if (diffuse) product_weights_impl<V, true, true>(cells, p, out);
-    else product_weights_impl<V, true, false>(cells, p, out);
-  } else {
-    if (diffuse) product_weights_impl<V, false, true>(cells, p, out);
-    else product_weights_impl<V, false, false>(cells, p, out);
-  }
+  if (p.moments) product_weights_lobes<V, true>(cells, p, out);
+  else product_weights_lobes<V, false>(cells, p, out);
 }
 
 }  // namespace envpis::detail::ENVPIS_KERNEL_NS

@@ -143,6 +143,7 @@ TEST(ProductSampler, SimdWeightsEqualScalarReference) {
   const auto tables = test_tables();
   for (const auto& [name, table] : tables) {
     ProductSamplerOptions simd_opt, scalar_opt;  // the paper's top level: the kernels' weights as they are
+    simd_opt.cell_estimate = scalar_opt.cell_estimate = CellEstimate::Cone;  // the reference below
     simd_opt.env_floor = scalar_opt.env_floor = 0;
     scalar_opt.simd = Simd::Scalar;
     ProductSampler simd(*table, simd_opt), scalar(*table, scalar_opt);
@@ -529,6 +530,7 @@ TEST(ProductSampler, RefinementConcentratesOnANarrowLobe) {
   o.subdivision = 4;
   const ImportanceTable table(synthetic_latlong(64, 32, [](int, int) { return 1.0f; }), o);
   ProductSamplerOptions one = refined(), two = refined();
+  one.cell_estimate = two.cell_estimate = CellEstimate::Cone;  // the cells whose cones graze the lobe
   one.refine = false;
   two.refine_cells = 8;
   one.proxy.min_alpha = two.proxy.min_alpha = 0.0f;  // the lobe as narrow as the BSDF's
@@ -584,4 +586,147 @@ TEST(ProductSampler, RefinedFloorBoundsTheDensityByTheEnvironments) {
     }
   }
   EXPECT_LT(worst_unfloored, 0.5 * bound0);
+}
+
+// ---- The moments estimate (CellEstimate::Moments): each cell's proxy at its importance-weighted mean
+// direction (the cosine lobes from it and its spread).
+
+namespace {
+ProductSamplerOptions moments(bool refine) {
+  ProductSamplerOptions o;
+  o.refine = refine;
+  o.cell_estimate = CellEstimate::Moments;
+  return o;
+}
+
+// The tables of both sets (the adversarial tiny suns on a corner and at the pole among them).
+std::vector<std::pair<std::string, std::shared_ptr<ImportanceTable>>> all_tables() {
+  auto t = test_tables();
+  for (auto& r : refined_tables()) t.push_back(r);
+  return t;
+}
+}  // namespace
+
+TEST(ProductSampler, MomentsChiSquareOverManyConfigurations) {
+  const auto tables = all_tables();
+  const int per_table = 8;
+  const int tests = per_table * int(tables.size());
+  int k = 0;
+  for (const auto& [name, table] : tables) {
+    // One-level and refined (on tables with sub-cells), alternating.
+    ProductSampler one(*table, moments(false));
+    std::unique_ptr<ProductSampler> two;
+    if (table->subdivision() > 1) two = std::make_unique<ProductSampler>(*table, moments(true));
+    for (const Config& c : random_configs(per_table, 500 + k)) {
+      ProductSampler& ps = two && k % 2 ? *two : one;
+      ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy)) << name << " " << c.label;
+      const auto r = product_chi2(ps, 5000 + k++, tests);
+      EXPECT_TRUE(r.passed) << name << " " << c.label << ": " << r.message;
+    }
+  }
+  EXPECT_GE(k, 50);
+}
+
+// The moments estimate weighs exactly the cells the cone estimate weighs (the same horizon gates; the
+// lobes' tails keep every other cell positive), so it samples everywhere the paper's sampler does.
+TEST(ProductSampler, MomentsEstimatePositiveWhereTheConeIs) {
+  for (const auto& [name, table] : all_tables()) {
+    ProductSamplerOptions cone_opt, moment_opt = moments(false);
+    cone_opt.cell_estimate = CellEstimate::Cone;
+    cone_opt.env_floor = moment_opt.env_floor = 0;
+    ProductSampler cone(*table, cone_opt), moment(*table, moment_opt);
+    for (const Config& c : random_configs(40, 31)) {
+      ASSERT_TRUE(cone.prepare(c.n, c.wo, c.proxy));
+      ASSERT_TRUE(moment.prepare(c.n, c.wo, c.proxy));
+      for (int i = 0; i < table->cell_count(); ++i)
+        ASSERT_EQ(cone.cell_probability(i) > 0, moment.cell_probability(i) > 0) << name << " " << c.label << " cell " << i;
+    }
+  }
+}
+
+// What the estimate is for: the top level's share of each cell should follow the cell's true mass
+// M_c = sum over its fine texels of importance x proxy. Measured by the cell-level variance factor
+// sum_c M_c^2 / p_c / (sum M)^2 (1: cells chosen exactly by their mass): geometric mean over random
+// proxies, lower with the moments than with the cones on every table.
+TEST(ProductSampler, MomentsEstimateFollowsTheCellMassesBetter) {
+  for (const auto& [name, table] : all_tables()) {
+    const int N = table->fine_resolution(), T = table->top_resolution();
+    if (N > 512) continue;  // the quadrature below visits every fine texel per proxy
+    ProductSamplerOptions cone_opt, moment_opt = moments(false);
+    cone_opt.cell_estimate = CellEstimate::Cone;
+    cone_opt.env_floor = moment_opt.env_floor = 0;
+    ProductSampler cone(*table, cone_opt), moment(*table, moment_opt);
+    double log_cone = 0, log_moment = 0;
+    int n = 0;
+    for (const Config& c : random_configs(24, 41)) {
+      ASSERT_TRUE(cone.prepare(c.n, c.wo, c.proxy));
+      ASSERT_TRUE(moment.prepare(c.n, c.wo, c.proxy));
+      const PreparedProxy& pp = cone.prepared_proxy();
+      std::vector<double> mass(table->cell_count(), 0.0);
+      double total = 0;
+      for (int y = 0; y < N; ++y)
+        for (int x = 0; x < N; ++x) {
+          const Vec3 d = equal_area_square_to_sphere({(x + 0.5f) / N, (y + 0.5f) / N});
+          const double m = double(table->importance(x, y)) * pp.eval(d);
+          mass[(y / (N / T)) * T + x / (N / T)] += m;
+          total += m;
+        }
+      if (!(total > 0)) continue;
+      double vc = 0, vm = 0;
+      for (int i = 0; i < table->cell_count(); ++i) {
+        if (mass[i] == 0) continue;
+        const double m = mass[i] / total;
+        vc += m * m / cone.cell_probability(i);
+        vm += m * m / moment.cell_probability(i);
+      }
+      log_cone += std::log(vc);
+      log_moment += std::log(vm);
+      ++n;
+    }
+    ASSERT_GT(n, 10) << name;
+    const double gc = std::exp(log_cone / n), gm = std::exp(log_moment / n);
+    std::printf("%s: cell-level variance factor, cone %.4f, moments %.4f\n", name.c_str(), gc, gm);
+    EXPECT_LT(gm, gc) << name;
+    EXPECT_GE(gm, 1.0 - 1e-6) << name;  // no distribution beats the masses themselves
+  }
+}
+
+TEST(ProductSampler, MomentsKernelsMatchTheScalarKernels) {
+  const std::vector<const detail::Kernels*> sets = detail::kernels_available();
+  const detail::Kernels& ref = detail::kernels_scalar();
+  for (const auto& [name, table] : all_tables()) {
+    const detail::CellArrays cells = detail::cell_arrays(*table);
+    std::vector<float> expected(cells.padded_count), got(cells.padded_count);
+    for (const Config& c : random_configs(30, 19)) {
+      const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo);
+      ASSERT_TRUE(pp.valid());
+      detail::LobeParams lobes = detail::to_lobe_params(pp);
+      lobes.moments = 1;
+      ref.product_weights(cells, lobes, expected.data());
+      double total = 0;
+      for (float w : expected) {
+        ASSERT_TRUE(std::isfinite(w) && w >= 0) << name << " " << c.label;
+        total += w;
+      }
+      ASSERT_GT(total, 0) << name << " " << c.label;
+      for (const detail::Kernels* k : sets) {
+        k->product_weights(cells, lobes, got.data());
+        for (int i = 0; i < cells.padded_count; ++i)
+          ASSERT_NEAR(got[i], expected[i], 2e-3 * std::max(double(expected[i]), 1e-6 * total))
+              << k->name << " " << name << " " << c.label << " cell " << i;
+      }
+    }
+  }
+}
+
+TEST(ProductSampler, MomentsDoNotAllocate) {
+  ImportanceTableOptions o;
+  o.subdivision = 4;
+  const ImportanceTable flat(synthetic_sky()), table(synthetic_sky(), o);
+  ProductSampler one(flat, moments(false)), two(table, moments(true));
+  expect_no_allocation(one);
+  expect_no_allocation(two);
+  EXPECT_EQ(to_string(parse_cell_estimate("moments")), std::string("moments"));
+  EXPECT_EQ(parse_cell_estimate("cone"), CellEstimate::Cone);
+  EXPECT_THROW(parse_cell_estimate("centroid"), Error);
 }

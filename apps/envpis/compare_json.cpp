@@ -105,7 +105,8 @@ void put_sampling_options(json& j, const CompareSession& session) {
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
                           {"env_mix", base.product.env_mix},
-                          {"env_floor", base.product.env_floor}};
+                          {"env_floor", base.product.env_floor},
+                          {"cell_estimate", to_string(base.product.cell_estimate)}};
   if (!common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
   j["top_resolution"] = base.light_table.top_resolution;

@@ -121,7 +121,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--proxy-transform", proxy_transform, "product: proxy roughness transform (default: the library's)")
       ->type_name("T");
   sub.add_option("--proxy-min-alpha", proxy_min_alpha,
-                 "product: floor on the transformed proxy roughness, [0, 1] (default: the library's)")
+                 "product: floor on the transformed proxy roughness, [0, 1] (default: 0.2 with --cell-estimate "
+                 "moments, else the library's, 0.35)")
       ->type_name("FLOAT");
   sub.add_option("--closed-surfaces", closed_surfaces,
                  "product and oracle: leave out light samples into closed transmissive objects (default: the "
@@ -140,6 +141,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product with --subcells > 1: the heaviest top cells (up to this many, 0..64) re-weighed from "
                  "their sub-cells in prepare (default: the library's, 0)")
       ->type_name("K");
+  sub.add_option("--cell-estimate", cell_estimate,
+                 "product: how a cell's proxy value is estimated: cone (the paper's, the lobes at the cell's "
+                 "bounding cone) or moments (at its importance-weighted mean direction; "
+                 "docs/refinement.md) (default: moments; the library's is cone)")
+      ->type_name("cone|moments");
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -187,6 +193,16 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   o.product.refine = o.light_table.subdivision > 1;
   if (!refine_cells.empty())
     o.product.refine_cells = static_cast<int>(parse_integer("--refine-cells", refine_cells, 0, 64));
+  // The renderer's default is moments (docs/refinement.md, measured with the analyzer), as its default
+  // --subcells is 4; the library's defaults stay the paper's sampler.
+  try {
+    o.product.cell_estimate = parse_cell_estimate(cell_estimate.empty() ? "moments" : cell_estimate);
+  } catch (const Error& e) {
+    throw Error(std::string("--cell-estimate: ") + e.what());
+  }
+  // The roughness floor was the cone's remedy (a narrow lobe gives its peak to every cell its cone
+  // reaches); with moments a lower one pays under MIS (docs/refinement.md), unless --proxy-min-alpha.
+  if (proxy_min_alpha.empty() && o.product.cell_estimate == CellEstimate::Moments) o.product.proxy.min_alpha = 0.2f;
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for

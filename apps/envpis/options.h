@@ -55,7 +55,8 @@ struct SceneOptionArgs {
   std::string top = "12", fine = "0", subcells = "4";
   std::string peak_ratio;  // empty: the library's default
   std::string oracle_res = "48", oracle_dirs = "4", oracle_compensation = "on";
-  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells;  // empty: the library's defaults
+  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
+      cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}

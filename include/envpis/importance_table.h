@@ -2,7 +2,9 @@
 //
 // Both levels live on the equal-area square, so every cell of a level subtends the same solid angle.
 //   top level:  T x T cells (T = 12 by default). Per cell: its probability E[c] (share of the map's
-//               importance), and a cone (axis, half-angle) that contains every direction of the cell.
+//               importance), a cone (axis, half-angle) that contains every direction of the cell, and
+//               the cell's importance-weighted mean direction and spread (for the product sampler's
+//               CellEstimate::Moments; the same per sub-cell).
 //   sub-cells:  each top cell is cut into S x S sub-cells (S = 1 by default: the paper's two levels).
 //               Per sub-cell: its share of its top cell's importance and a bounding cone, which a
 //               refined sampler (ProductSampler with refine) weights again per shading point.
@@ -173,6 +175,7 @@ class ImportanceTable {
   friend detail::CellArrays detail::subcell_arrays(const ImportanceTable& table, int c);
   void build_levels(const std::vector<double>& subcell_sums);
   void build_cones();
+  void build_moments(const detail::FineLevel& fine);
   struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell,
     int cell, sub, leaf, tx, ty;  // texel (tx, ty) in the fine-level cell
   };
@@ -188,8 +191,10 @@ class ImportanceTable {
   DiscreteDistribution2D whole_cell_;            // S = 1: the one sub-cell
   std::vector<Cone> cones_;
   std::vector<Cone> sub_cones_;  // T^2 S^2, cell-major (empty when S = 1)
-  std::vector<float> soa_[6];  // cone axis x, y, z, cos, sin, E[c]; padded like top_.values()
-  std::vector<float> sub_soa_[6];  // the same per sub-cell (share of its cell), sub_stride_ per cell
+  // Cone axis x, y, z, cos, sin, E[c], then the importance-weighted mean direction x, y, z and its
+  // spread (detail::CellArrays); padded like top_.values().
+  std::vector<float> soa_[10];
+  std::vector<float> sub_soa_[10];  // the same per sub-cell (share of its cell), sub_stride_ per cell
   int sub_stride_ = 0;
 };
 

@@ -30,6 +30,14 @@
 // both floors the density wherever the product samples is at least (r / (1 + r))^2 of the
 // environment table's.
 //
+// Cell estimate (options.cell_estimate): the cone-closest value above is an upper bound of the proxy
+// over the cell, loose for every cell only partly inside a lobe, and that looseness is much of what
+// separates the top level from one that knew each cell's true share (docs/refinement.md). Moments
+// evaluate the lobes at the cell's importance-weighted mean direction instead (the cosine lobes from it
+// and the cell's angular spread): an estimate of the importance-weighted mean of the proxy over the
+// cell, at the same cost per cell. The cone still gates each side of the surface, and every lobe stays
+// positive there, so the same cells are positive as with the cone.
+//
 // Optionally a fraction env_mix of the environment-only distribution is mixed into the top level
 // (P'[c] = (1 - m) P[c] / sum P + m E[c]), a defensive mixture against cells the proxy under-rates.
 //
@@ -54,6 +62,20 @@ namespace detail {
 struct Kernels;
 }
 
+/// How a cell's proxy value is estimated (the P[c] above, and P[s | c] when refining).
+enum class CellEstimate {
+  /// Every lobe at the direction of the cell's bounding cone closest to its axis (the paper's): an
+  /// upper bound of the proxy over the cell, loose for every cell only partly inside a lobe.
+  Cone,
+  /// The glossy lobes at the cell's importance-weighted mean direction, the cosine lobes as their mean
+  /// over the cell from that direction and the cell's angular spread (the table stores both per cell
+  /// and per sub-cell): an estimate of the importance-weighted mean of the proxy over the cell, not a
+  /// bound. The cone still decides which side of the surface a cell reaches.
+  Moments,
+};
+const char* to_string(CellEstimate e);
+CellEstimate parse_cell_estimate(const std::string& s);  ///< "cone" | "moments"; throws Error otherwise
+
 struct ProductSamplerOptions {
   ProxyOptions proxy;
   float env_mix = 0.0f;  ///< fraction of the environment-only distribution mixed in, [0, 1]
@@ -69,6 +91,7 @@ struct ProductSamplerOptions {
   /// out keep the whole cell's looser estimate and take samples from the re-estimated ones
   /// (docs/refinement.md). 0: only the chosen cell's sub-cells are weighed, when sampled.
   int refine_cells = 0;
+  CellEstimate cell_estimate = CellEstimate::Cone;
   Simd simd = Simd::Best;  ///< instruction set of the weights kernel (envpis/simd.h)
 };
 

@@ -76,18 +76,28 @@ def test_chi2_detects_a_wrong_pdf(table):
     assert p < 1e-6
 
 
-@pytest.mark.parametrize("name", ["glossy", "glass"])
-def test_refined_product_sampler_chi2(name, latlong_map):
-    """The refined sampler (sub-cells chosen by the product too) through the bindings."""
+@pytest.mark.parametrize("name,estimate", [("glossy", "cone"), ("glass", "cone"), ("glossy", "moments"),
+                                           ("glass", "moments")])
+def test_refined_product_sampler_chi2(name, estimate, latlong_map):
+    """The refined sampler (sub-cells chosen by the product too) through the bindings, with either
+    cell estimate."""
     table = envpis.ImportanceTable(latlong_map, subdivision=4)
     assert table.subdivision == 4 and table.fine_resolution % RES == 0
     options = envpis.ProductSamplerOptions()
     options.refine = True
+    options.cell_estimate = estimate
+    assert options.cell_estimate == estimate
     sampler = envpis.ProductSampler(table, options)
     assert sampler.refines
     n, wo, b = SHADING_POINTS[name]
     assert sampler.prepare(n, wo, b)
-    check(sampler.sample, sampler.pdf, seed=20 + len(name))
+    check(sampler.sample, sampler.pdf, seed=20 + len(name) + len(estimate))
+
+
+def test_cell_estimate_rejects_unknown_names():
+    options = envpis.ProductSamplerOptions()
+    with pytest.raises(RuntimeError, match="cone"):
+        options.cell_estimate = "nearest"
 
 
 def test_refined_product_sampler_needs_subcells(table):
