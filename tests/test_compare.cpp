@@ -163,7 +163,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);
   const std::string args = "compare --scene fig1 --width 64 --height 12 --spp 4 --ref-spp 64 --strategies mis,product,oracle "
-                           "--oracle-res 8 --oracle-dirs 1 --equal-time auto --repeats 1 --no-plots --no-analysis --quiet "
+                           "--oracle-res 48 --oracle-dirs 1 --equal-time auto --repeats 1 --no-plots --no-analysis --quiet "
                            "--cache-dir '" + cache.string() + "' --out '" + out.string() + "'";
   const CmdResult r = run(args);
   ASSERT_EQ(r.code, 0) << r.output;
