@@ -405,6 +405,14 @@ def gltf_seeds():
 
 # Inputs that once failed, kept as seeds so that every run replays them first.
 REGRESSIONS = {
+    "fuzz_image_load": {
+        # A 4x4 RGB PNG (first byte 0x07: the .png extension) whose oFFs chunk has a bad length:
+        # OpenImageIO 2.4's PNG reader leaked the 31-byte error string of its read callback when libpng
+        # longjmp'd out of it (LeakSanitizer, CI's fuzz run on a fresh machine). EnvironmentMap::load now
+        # decodes PNG with libpng's simplified API (src/io/png_decode.h): a one-line error, no leak.
+        "regress_png_bad_offs_chunk":
+        "B4lQTkcNChoKAAAADUlIRFIAAAAEAAAABAgCAAAAJpMJKQgAAAlvRkZzAAAAAAAAAAAA2iq2zgAAABJJREFUCJkk/N/AAAdMDAzEcABM0QGH/CcDJQAAAABJRU5ErkJggg==",
+    },
     "fuzz_table_product": {
         # ProductSampler::prepare with a denormal translucent weight (4.4e-39): the product-weight sum
         # was below FLT_MIN, 1/sum overflowed and every pdf was inf (fixed in src/product_sampler.cpp).
@@ -440,7 +448,9 @@ def main():
     if len(sys.argv) != 1:
         sys.exit(__doc__)
     with tempfile.TemporaryDirectory() as tmp:
-        write("fuzz_image_load", image_seeds(tmp))
+        seeds = image_seeds(tmp)
+    seeds.update({k: base64.b64decode(v) for k, v in REGRESSIONS["fuzz_image_load"].items()})
+    write("fuzz_image_load", seeds)
     seeds = table_seeds()
     seeds.update({k: base64.b64decode(v) for k, v in REGRESSIONS["fuzz_table_product"].items()})
     write("fuzz_table_product", seeds)

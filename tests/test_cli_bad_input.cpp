@@ -69,6 +69,14 @@ float sky(int x, int y, int c, int w, int h) {
   return v;
 }
 
+// fuzz/make_corpus.py's regress_png_bad_offs_chunk without its first byte (the harness's extension choice).
+const std::string kPngBadOffsChunk(
+    "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x04\x00\x00\x00\x04"
+    "\x08\x02\x00\x00\x00\x26\x93\x09\x29\x08\x00\x00\x09\x6f\x46\x46\x73\x00\x00\x00\x00\x00\x00\x00"
+    "\x00\x00\xda\x2a\xb6\xce\x00\x00\x00\x12\x49\x44\x41\x54\x08\x99\x24\xfc\xdf\xc0\x00\x07\x4c\x0c"
+    "\x0c\xc4\x70\x00\x4c\xd1\x01\x87\xfc\x27\x03\x25\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+    96);
+
 class BadInput : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -81,8 +89,9 @@ class BadInput : public ::testing::Test {
     write_float_image(path("good.hdr"), W, H, sky64);
     write_bytes(path("empty.exr"), "");
     write_bytes(path("empty.hdr"), "");
+    write_float_image(path("good.png"), W, H, [](int x, int y, int c) { return float((x + y + c) % 7) / 6.0f; });
     // Truncated: the first third of a valid file.
-    for (const char* ext : {"exr", "hdr"}) {
+    for (const char* ext : {"exr", "hdr", "png"}) {
       const std::string full = read_bytes(path(std::string("good.") + ext));
       write_bytes(path(std::string("truncated.") + ext), full.substr(0, full.size() / 3));
     }
@@ -114,6 +123,9 @@ class BadInput : public ::testing::Test {
       ASSERT_FALSE(b.empty());
       write_bytes(path("claims-8M-wide.exr"), b);
     }
+    // A 4x4 PNG whose oFFs chunk has a bad length (fuzz_image_load's find, seed regress_png_bad_offs_chunk):
+    // OpenImageIO's PNG reader leaked its error string on it.
+    write_bytes(path("bad-offs-chunk.png"), kPngBadOffsChunk);
     write_bytes(path("text.exr"), "this is not an image\n");
     write_bytes(path("text.png"), "this is not an image either\n");
     fs::copy_file(path("good.exr"), path("exr-named.hdr"));
@@ -253,7 +265,9 @@ TEST_F(BadInput, UnusableFilesGiveOneLineErrorsFromEveryCommand) {
       {"corrupt-data.hdr", "could not read the pixels (corrupt or truncated?): "},
       {"claims-8M-wide.exr", "the image's scanlines are implausibly large (8000000 texels of 3 channels"},
       {"text.exr", "OpenEXR reader: "},
-      {"text.png", "PNG"},
+      {"text.png", "PNG reader: Not a PNG file"},
+      {"truncated.png", "PNG reader: "},
+      {"bad-offs-chunk.png", "PNG reader: "},
       {"directory.exr", "is a directory, not an image file"},
       {"fifo.exr", "is not a regular file"},
       {"good.exr/inside-a-file.exr", "Not a directory"},

@@ -68,8 +68,8 @@ struct MapLoadReport {
   std::size_t inf_texels = 0;
   std::size_t negative_texels = 0;
   std::size_t repaired() const { return nan_texels + inf_texels + negative_texels; }
-  /// OpenImageIO reader that decoded the file ("openexr", "hdr", "pnm", "tiff", "png", ...); empty for
-  /// from_pixels().
+  /// The reader that decoded the file: OpenImageIO's ("openexr", "hdr", "pnm", "tiff", ...) or "png"
+  /// (libpng itself, never OpenImageIO's PNG reader); empty for from_pixels().
   std::string format;
   /// The reader the file's extension names (empty: none). It differs from `format` when the extension
   /// is wrong (an OpenEXR file named .png): load() goes by the content for OpenEXR, Radiance HDR, PFM,

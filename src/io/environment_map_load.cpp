@@ -12,6 +12,7 @@
 
 #include "envpis/environment_map.h"
 #include "../image_format.h"
+#include "png_decode.h"
 
 // EnvironmentMap::load: the envpis::io component, the only part of envpis that needs OpenImageIO.
 namespace envpis {
@@ -105,41 +106,9 @@ void read_texels(OIIO::ImageInput& in, const OIIO::ImageSpec& spec, int nc, floa
   }
 }
 
-}  // namespace
-
-EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMapOptions& options) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec && ec != std::errc::no_such_file_or_directory) fail(path, ec.message());
-  if (!std::filesystem::exists(status)) fail(path, "no such file");
-  if (std::filesystem::is_directory(status)) fail(path, "is a directory, not an image file");
-  // A FIFO or a device would block or never end: only regular files are read.
-  if (!std::filesystem::is_regular_file(status)) fail(path, "is not a regular file");
-  if (std::filesystem::file_size(path, ec) == 0 && !ec) fail(path, "the file is empty (0 bytes)");
-
-  unsigned char head[16] = {};
-  std::size_t head_bytes = 0;
-  {
-    errno = 0;
-    std::ifstream f(path, std::ios::binary);
-    if (!f) fail(path, std::string("cannot open: ") + (errno ? std::strerror(errno) : "unknown reason"));
-    f.read(reinterpret_cast<char*>(head), sizeof head);
-    head_bytes = static_cast<std::size_t>(f.gcount());
-  }
-
-  // The reader: the content's for the usual HDR formats, else the extension's. Never OpenImageIO's
-  // fallback that offers a file to every reader it has (third-party decoders that may take a junk
-  // file for a huge image).
-  std::string ext = detail::lower(std::filesystem::path(path).extension().string());
-  if (!ext.empty()) ext.erase(0, 1);
-  const std::string by_content = format_from_content(head, head_bytes);
-  const std::string by_extension = format_from_extension(ext);
-  const std::string format = !by_content.empty() ? by_content : by_extension;
-  if (format.empty())
-    fail(path, ext.empty() ? "unknown image format (no file extension, and the content is not OpenEXR, "
-                             "Radiance HDR, PFM, TIFF or PNG)"
-                           : "unknown image format (no reader for the extension '." + ext +
-                                 "', and the content is not OpenEXR, Radiance HDR, PFM, TIFF or PNG)");
+// Decodes the file with OpenImageIO's reader for `format` alone, header claims bounded first; returns
+// interleaved RGB floats (one channel repeated for grey) and the size.
+std::vector<float> read_with_oiio(const std::string& path, const std::string& format, int& width, int& height) {
   auto in = OIIO::ImageInput::create(format);
   if (!in) fail(path, "no " + format + " reader in this OpenImageIO: " + first_line(OIIO::geterror()));
   OIIO::ImageSpec opened;
@@ -180,7 +149,62 @@ EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMa
     rgb[i * 3 + 1] = nc >= 3 ? p[1] : p[0];
     rgb[i * 3 + 2] = nc >= 3 ? p[2] : p[0];
   }
-  EnvironmentMap map = from_pixels(spec.width, spec.height, std::move(rgb), options);
+  width = spec.width;
+  height = spec.height;
+  return rgb;
+}
+
+}  // namespace
+
+EnvironmentMap EnvironmentMap::load(const std::string& path, const EnvironmentMapOptions& options) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory) fail(path, ec.message());
+  if (!std::filesystem::exists(status)) fail(path, "no such file");
+  if (std::filesystem::is_directory(status)) fail(path, "is a directory, not an image file");
+  // A FIFO or a device would block or never end: only regular files are read.
+  if (!std::filesystem::is_regular_file(status)) fail(path, "is not a regular file");
+  if (std::filesystem::file_size(path, ec) == 0 && !ec) fail(path, "the file is empty (0 bytes)");
+
+  unsigned char head[16] = {};
+  std::size_t head_bytes = 0;
+  {
+    errno = 0;
+    std::ifstream f(path, std::ios::binary);
+    if (!f) fail(path, std::string("cannot open: ") + (errno ? std::strerror(errno) : "unknown reason"));
+    f.read(reinterpret_cast<char*>(head), sizeof head);
+    head_bytes = static_cast<std::size_t>(f.gcount());
+  }
+
+  // The reader: the content's for the usual HDR formats, else the extension's. Never OpenImageIO's
+  // fallback that offers a file to every reader it has (third-party decoders that may take a junk
+  // file for a huge image).
+  std::string ext = detail::lower(std::filesystem::path(path).extension().string());
+  if (!ext.empty()) ext.erase(0, 1);
+  const std::string by_content = format_from_content(head, head_bytes);
+  const std::string by_extension = format_from_extension(ext);
+  const std::string format = !by_content.empty() ? by_content : by_extension;
+  if (format.empty())
+    fail(path, ext.empty() ? "unknown image format (no file extension, and the content is not OpenEXR, "
+                             "Radiance HDR, PFM, TIFF or PNG)"
+                           : "unknown image format (no reader for the extension '." + ext +
+                                 "', and the content is not OpenEXR, Radiance HDR, PFM, TIFF or PNG)");
+  int width = 0, height = 0;
+  std::vector<float> rgb;
+  if (format == "png") {  // libpng directly, never OpenImageIO's PNG reader (png_decode.h says why)
+    detail::DecodedPng png;
+    try {
+      png = detail::decode_png(path, kMaxTexels);
+    } catch (const Error& e) {
+      fail(path, e.what());
+    }
+    width = png.width;
+    height = png.height;
+    rgb = std::move(png.rgb);
+  } else {
+    rgb = read_with_oiio(path, format, width, height);
+  }
+  EnvironmentMap map = from_pixels(width, height, std::move(rgb), options);
   map.path_ = path;
   map.report_.format = format;
   map.report_.extension_format = by_extension;
