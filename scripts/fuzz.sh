@@ -1,8 +1,25 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan, library instrumented too) in build-fuzz
-# and runs each for a bounded time, starting from a copy of its seed corpus in a temporary directory
-# (new inputs never land in the repository). Fails if any target finds a crash, a sanitizer report, a
-# leak or a contract violation; the reproducers are kept in build-fuzz/fuzz-artifacts/<target>/.
+# and runs each in two phases, on a copy of its seed corpus in a temporary directory (new inputs never
+# land in the repository):
+#
+#   1. replay   every seed of fuzz/corpus/<target>/ (and, for fuzz_gltf, the glTF files of Debian's
+#               assimp-testmodels) must pass: no crash, sanitizer report, leak, contract violation, OOM
+#               or timeout. This phase is deterministic: it is what can fail on any machine.
+#   2. explore  time-boxed mutation (FUZZ_SECONDS). What it finds depends on the machine's speed, so a
+#               finding only fails the run when it is in envpis's own code. fuzz_image_load and fuzz_gltf
+#               run in fork mode with -ignore_crashes/-ignore_ooms/-ignore_timeouts; each crash or leak
+#               they found is replayed with a symbolized stack and classified by its first frame that
+#               is either at a line of our sources (render/, src/, fuzz/, include/, apps/) or in a
+#               shared library other than the C/C++ runtime: "ours" fails the run; "third-party"
+#               (OpenImageIO, OpenEXR, libpng, assimp, ...) is printed and kept as an artifact; one that
+#               does not reproduce is printed and kept too. OOMs and timeouts of those two targets are
+#               third-party allocation and decoding behaviour (fuzz/README.md) and are listed.
+#               fuzz_table_product runs only our code with bounded sizes: any finding fails it.
+#
+# Reports are symbolized (llvm-symbolizer, Debian's llvm package, installed by scripts/install-deps.sh):
+# without it neither the LSan suppressions of scripts/lsan.supp nor the classification could see
+# function names or our source lines, so its absence is an error.
 #
 # Usage: bash scripts/fuzz.sh
 # Environment:
@@ -12,22 +29,12 @@
 #   FUZZ_TARGETS   space-separated targets (default: fuzz_image_load fuzz_table_product fuzz_gltf)
 #   FUZZ_PARALLEL  1 (default): run the targets at the same time (one per core); 0: one after another
 #   FUZZ_BUILD     build directory (default build-fuzz)
-#   FUZZ_SEED      libFuzzer's -seed (default 1: CI explores the same inputs on the same code and a
-#                  failure replays); 0 = a random seed, for hunting
+#   FUZZ_SEED      libFuzzer's -seed (default 1: on the same code a failure replays; how far the
+#                  exploration gets in FUZZ_SECONDS still depends on the machine); 0 = a random seed
 #
-# fuzz_gltf first replays its whole seed corpus (the generated seeds of fuzz/corpus/fuzz_gltf and, copied
-# at run time by fuzz/make_corpus.py --assimp-gltf, the glTF files of Debian's assimp-testmodels, valid
-# and deliberately broken): every seed must pass. Then it mutates in fork mode, where crashes whose
-# first frame outside the C/C++ runtime is inside libassimp (a third-party bug, see fuzz/README.md) are
-# listed but do not fail the run; a crash in our code, a contract violation or a leak does.
-#
-# Out-of-memory and timeout reports of fuzz_image_load and fuzz_gltf do not fail the run (they are listed): it runs
-# in fork mode with -ignore_ooms/-ignore_timeouts because OpenEXR 3.1 and OpenImageIO 2.4 allocate
-# whatever a corrupt header claims (a 2 GB string attribute, a 19 GB scanline buffer for a 6M-texel-wide
-# image before load() bounded the claims), which is third-party behaviour, not a crash; see
-# fuzz/README.md. fuzz_table_product bounds its own sizes, so there an OOM or a timeout is a finding
-# like any other.
-#
+# Artifacts: build-fuzz/fuzz-artifacts/<target>/ holds every finding, renamed ours-*, thirdparty-* or
+# unreproduced-*, each with a .txt of its symbolized report; logs are in build-fuzz/fuzz-logs/.
+
 # Reproduce a finding:  build-fuzz/fuzz/<target> build-fuzz/fuzz-artifacts/<target>/<file>
 # (fuzz_table_product: prefix ENVPIS_FUZZ_VERBOSE=1 to print what the input decodes to).
 set -euo pipefail
@@ -41,6 +48,14 @@ PARALLEL=${FUZZ_PARALLEL:-1}
 SEED=${FUZZ_SEED:-1}
 read -r -a TARGETS <<<"${FUZZ_TARGETS:-fuzz_image_load fuzz_table_product fuzz_gltf}"
 
+# The symbolizer of clang's sanitizer runtime (see the header).
+SYMBOLIZER=${ASAN_SYMBOLIZER_PATH:-$(command -v llvm-symbolizer || command -v llvm-symbolizer-14 || true)}
+if [ -z "$SYMBOLIZER" ] || [ ! -x "$SYMBOLIZER" ]; then
+  echo "fuzz: llvm-symbolizer not found (Debian package llvm; scripts/install-deps.sh installs it)" >&2
+  exit 1
+fi
+export ASAN_SYMBOLIZER_PATH=$SYMBOLIZER
+
 t0=$(date +%s)
 cmake -S . -B "$BUILD" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DENVPIS_BUILD_FUZZ=ON -DENVPIS_BUILD_TESTS=OFF -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS=OFF >/dev/null
@@ -52,80 +67,113 @@ trap 'rm -rf "$work"' EXIT
 mkdir -p "$BUILD/fuzz-logs"
 
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
-# Full stacks at allocation time, so that scripts/lsan.supp can match third-party leaks.
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0}
+# ASAN_FULL: full stacks at allocation time, through the uninstrumented libraries (no frame pointers)
+# too, so that a leak's stack shows where it was allocated: for fuzz_image_load, whose allocations are
+# mostly OpenImageIO's and OpenEXR's, and for classifying every finding. It slows each malloc, so the
+# other targets fuzz with fast unwinding.
+ASAN_FAST=${ASAN_OPTIONS:-detect_leaks=1}
+ASAN_FULL=${ASAN_OPTIONS:-detect_leaks=1:fast_unwind_on_malloc=0}
 
-run_target() {  # run_target <target>; returns libFuzzer's status
-  local t=$1 dir="$work/$1"
-  mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/tmp"
+target_secs() { if [ "$1" = fuzz_gltf ]; then echo "$GLTF_SECS"; else echo "$SECS"; fi; }
+
+run_target() {  # run_target <target>: the replay, then the exploration; returns 1 if the replay failed
+  local t=$1 dir="$work/$1" secs
+  secs=$(target_secs "$t")
+  mkdir -p "$dir/corpus" "$dir/artifacts" "$dir/replay-artifacts" "$dir/tmp"
   rm -f "$BUILD/fuzz-logs/$t.log" "$BUILD/fuzz-logs/$t.replay.log"
   cp "fuzz/corpus/$t/"* "$dir/corpus/"
-  local secs=$SECS
-  [ "$t" = fuzz_gltf ] && secs=$GLTF_SECS
-  local args=(-max_total_time="$secs" -artifact_prefix="$dir/artifacts/" -print_final_stats=1
-              -rss_limit_mb=3072 -seed="$SEED")
-  local asan=detect_leaks=1
+  local limits=(-rss_limit_mb=3072 -timeout=20)
+  local args=(-max_total_time="$secs" -artifact_prefix="$dir/artifacts/" -print_final_stats=1 -seed="$SEED")
   case "$t" in
-    fuzz_image_load)
-      args+=(-fork=1 -ignore_ooms=1 -ignore_timeouts=1 -timeout=20 -max_len=8192)
-      asan+=:fast_unwind_on_malloc=0 ;;
-    fuzz_table_product)
-      args+=(-timeout=30 -max_len=16384) ;;
+    fuzz_image_load) args+=(-max_len=8192) ;;
+    fuzz_table_product) args+=(-max_len=16384); limits=(-rss_limit_mb=3072 -timeout=30) ;;
     fuzz_gltf)
       python3 fuzz/make_corpus.py --assimp-gltf "$dir/corpus"
       # Seeds up to 160 KB (make_corpus.py's GLTF_MAX_SEED); a dictionary of glTF keys for the JSON.
-      args+=(-timeout=20 -max_len=160000 -dict=fuzz/fuzz_gltf.dict)
-      ls "$dir/corpus" | wc -l >"$dir/seeds"
-      # Replay: every seed must load or fail cleanly, third-party crashes included.
-      if ! TMPDIR="$dir/tmp" ASAN_OPTIONS=${ASAN_OPTIONS:-$asan} "$BUILD/fuzz/$t" -runs=0 -timeout=20 -max_len=160000 \
-           -rss_limit_mb=3072 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" "$dir/corpus" >"$BUILD/fuzz-logs/$t.replay.log" 2>&1; then
-        touch "$dir/replay-failed"
-        return 1
-      fi
-      [ "$secs" = 0 ] && return 0  # (libFuzzer's -max_total_time=0 would mean no limit)
-      args+=(-fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1) ;;
+      args+=(-max_len=160000 -dict=fuzz/fuzz_gltf.dict) ;;
   esac
-  # TMPDIR: the harness's scratch files and libFuzzer's fork-mode directories stay in $work.
-  TMPDIR="$dir/tmp" ASAN_OPTIONS=${ASAN_OPTIONS:-$asan} \
-    "$BUILD/fuzz/$t" "${args[@]}" "$dir/corpus" >"$BUILD/fuzz-logs/$t.log" 2>&1
+  ls "$dir/corpus" | wc -l >"$dir/seeds"
+  local asan=$ASAN_FAST
+  [ "$t" = fuzz_image_load ] && asan=$ASAN_FULL
+  # 1. Replay: every seed must load or fail cleanly, third-party code included. It judges outcomes, not
+  # speed: its timeout is 300 s per seed, since under ASan exr_claims_8M_wide takes 16 s on an idle
+  # 2-core machine and 35-45 s on a loaded one (OpenEXR sizes its line buffers from the claim before
+  # load() can refuse it). TMPDIR: the harness's scratch files (and libFuzzer's fork-mode directories
+  # below) stay in $work.
+  if ! TMPDIR="$dir/tmp" ASAN_OPTIONS=$asan "$BUILD/fuzz/$t" -runs=0 -rss_limit_mb=3072 -timeout=300 -print_final_stats=1 \
+       -artifact_prefix="$dir/replay-artifacts/" "$dir/corpus" >"$BUILD/fuzz-logs/$t.replay.log" 2>&1; then
+    touch "$dir/replay-failed"
+    return 1
+  fi
+  [ "$secs" = 0 ] && return 0  # (libFuzzer's -max_total_time=0 would mean no limit)
+  # 2. Exploration.
+  if [ "$t" != fuzz_table_product ]; then args+=(-fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1); fi
+  TMPDIR="$dir/tmp" ASAN_OPTIONS=$asan "$BUILD/fuzz/$t" "${args[@]}" "${limits[@]}" "$dir/corpus" \
+    >"$BUILD/fuzz-logs/$t.log" 2>&1 || echo $? >"$dir/explore-status"
+  return 0
 }
 
-in_assimp() {  # in_assimp <target> <input>: whether the input crashes inside libassimp, not in our code
-  local report frame
-  report=$(TMPDIR="$work" ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0} timeout 120 "$BUILD/fuzz/$1" "$2" 2>&1 || true)
-  # The first stack frame in libassimp or at a line of our sources decides (frames of libc, libstdc++,
-  # the sanitizers' interceptors and libFuzzer are neither).
-  frame=$(grep -E '^ +#[0-9]+ ' <<<"$report" |
-          grep -E 'libassimp\.so|/(render|src|fuzz|include/envpis)/[^ ]*\.(cpp|h):[0-9]+' | head -n 1)
-  [[ "$frame" == *libassimp.so* ]]
+# classify <target> <input> <report file>: replays the input, writes its report, and prints "ours",
+# "third-party <library>" or "unreproduced". The first stack frame that is at a line of our sources or
+# in a shared library other than the C/C++ runtime decides (the sanitizers' interceptors and libFuzzer
+# live in the fuzz binary and are neither).
+classify() {
+  local status=0 frame
+  TMPDIR="$work" ASAN_OPTIONS=$ASAN_FULL timeout 120 "$BUILD/fuzz/$1" -timeout=20 -rss_limit_mb=3072 "$2" \
+    >"$3" 2>&1 || status=$?
+  if [ "$status" = 0 ]; then echo unreproduced; return; fi
+  frame=$(grep -E '^ +#[0-9]+ ' "$3" |
+          grep -E "$ROOT/(render|src|fuzz|include|apps)/[^ ]*:[0-9]+|\(/[^ ]*\.so[.0-9]*\+0x" |
+          grep -vE '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl)\.so|/ld-linux' | head -n 1 || true)
+  if [[ "$frame" == *"$ROOT/"* ]]; then
+    echo ours
+  elif [ -n "$frame" ]; then
+    echo "third-party $(sed -E 's|.*\(/[^ ]*/([^/ ]*\.so)[.0-9]*\+0x.*|\1|' <<<"$frame")"
+  else
+    echo ours  # a report without any frame of a library or of ours: treat it as ours and look
+  fi
 }
 
-report() {  # report <target> <status>
-  local t=$1 status=$2 dir="$work/$1" log="$BUILD/fuzz-logs/$1.log" secs=$SECS
-  [ "$t" = fuzz_gltf ] && secs=$GLTF_SECS
-  # Fork mode (fuzz_image_load, fuzz_gltf) exits with the status of its last job even when that job's
-  # OOM (71), timeout (70) or, for fuzz_gltf, crash was ignored: judge it by what it found instead.
-  local third_party=0 f
-  if [ "$t" = fuzz_gltf ] && { [ -e "$dir/replay-failed" ] || [ "$secs" = 0 ]; }; then
-    log="$BUILD/fuzz-logs/$t.replay.log"
-    [ -e "$dir/replay-failed" ] && echo "fuzz: $t: a seed of the corpus fails"
-  elif [ "$t" = fuzz_gltf ]; then
-    for f in $(find "$dir/artifacts" -name 'crash-*'); do
-      if in_assimp "$t" "$f"; then
-        mv "$f" "$dir/artifacts/assimp-$(basename "$f")"
-        third_party=$((third_party + 1))
-      fi
-    done
-    # The last job's crash was one of those: nothing of ours is left to fail the run.
-    if [ "$third_party" -gt 0 ] && [ -z "$(find "$dir/artifacts" -name 'crash-*' -o -name 'leak-*')" ]; then
-      status=0
+report() {  # report <target>: prints what the target did; returns 1 if the run must fail
+  local t=$1 dir="$work/$1" secs log
+  secs=$(target_secs "$t")
+  log="$BUILD/fuzz-logs/$t.log"
+  local out="$BUILD/fuzz-artifacts/$t"
+  if [ -e "$dir/replay-failed" ]; then
+    mkdir -p "$out"
+    cp "$dir/replay-artifacts/"* "$out/" 2>/dev/null || true
+    echo "fuzz: $t FAILED: a seed of the fixed corpus fails (log: $BUILD/fuzz-logs/$t.replay.log); its end:"
+    grep -vE '^#[0-9]+|^ *NEW_FUNC' "$BUILD/fuzz-logs/$t.replay.log" | tail -n 60
+    return 1
+  fi
+  local seeds
+  seeds=$(ls "fuzz/corpus/$t" | wc -l)
+  [ "$t" = fuzz_gltf ] && seeds="$seeds + $(($(cat "$dir/seeds") - seeds)) assimp-testmodels"
+  echo "fuzz: $t: replayed $(cat "$dir/seeds") seeds ($seeds): all pass"
+  [ "$secs" = 0 ] && return 0
+  # Findings of the exploration.
+  local ours=0 third=0 unrepro=0 f class name
+  for f in $(find "$dir/artifacts" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' \) | sort); do
+    mkdir -p "$out"
+    class=$(classify "$t" "$f" "$work/report.txt")
+    case "$class" in
+      ours) name="ours-$(basename "$f")"; ours=$((ours + 1)) ;;
+      unreproduced) name="unreproduced-$(basename "$f")"; unrepro=$((unrepro + 1)) ;;
+      *) name="thirdparty-${class#third-party }-$(basename "$f")"; third=$((third + 1)) ;;
+    esac
+    cp "$f" "$out/$name"
+    cp "$work/report.txt" "$out/$name.txt"
+    echo "fuzz: $t: finding $out/$name: $class"
+    if [ "$class" = ours ]; then
+      { grep -E 'ERROR|SUMMARY|runtime error|contract violated|^ +#[0-9]+ ' "$out/$name.txt" || true; } | head -n 30
     fi
-  fi
-  if [ "$t" != fuzz_table_product ] && { [ "$status" = 70 ] || [ "$status" = 71 ]; }; then
-    status=0
-  fi
-  if [ -n "$(find "$dir/artifacts" -name 'crash-*' -o -name 'leak-*' | head -n 1)" ]; then
-    [ "$status" = 0 ] && status=1
+  done
+  local ignored
+  ignored=$(find "$dir/artifacts" -name 'oom-*' -o -name 'timeout-*' | wc -l)
+  if [ "$ignored" -gt 0 ]; then
+    mkdir -p "$out"
+    find "$dir/artifacts" \( -name 'oom-*' -o -name 'timeout-*' \) -exec cp {} "$out/" \;
   fi
   # Inputs run: the final stats line, or in fork mode the parent's last "#<runs>: cov: ..." line.
   local runs
@@ -133,22 +181,31 @@ report() {  # report <target> <status>
   if [ "$runs" = 0 ]; then
     runs=$({ grep -E '^#[0-9]+: cov' "$log" || true; } | tail -n 1 | sed -E 's/^#([0-9]+):.*/\1/')
   fi
-  local ignored extra="" seeds
-  seeds=$(ls "fuzz/corpus/$t" | wc -l)
-  [ -f "$dir/seeds" ] && seeds="$seeds + $(($(cat "$dir/seeds") - seeds)) assimp-testmodels"
-  [ "$t" = fuzz_gltf ] && extra=", $third_party crash(es) inside assimp"
-  ignored=$(find "$dir/artifacts" -name 'oom-*' -o -name 'timeout-*' | wc -l)
-  echo "fuzz: $t: $runs inputs in ${secs} s, corpus $seeds seeds -> $(ls "$dir/corpus" | wc -l) inputs, $ignored oom/timeout${extra}, status $status (log: $log)"
-  if [ "$status" != 0 ] || [ -n "$(ls -A "$dir/artifacts")" ]; then
-    mkdir -p "$BUILD/fuzz-artifacts/$t"
-    cp "$dir/artifacts/"* "$BUILD/fuzz-artifacts/$t/" 2>/dev/null || true
-    ls "$dir/artifacts" | sed "s|^|fuzz: $t: artifact $BUILD/fuzz-artifacts/$t/|"
+  echo "fuzz: $t: explored ${runs:-0} inputs in $secs s -> $(ls "$dir/corpus" | wc -l) inputs; findings: $ours ours," \
+       "$third third-party, $unrepro unreproduced, $ignored oom/timeout (log: $log)"
+  if [ "$t" = fuzz_table_product ]; then
+    # Our code only: any finding, OOM or timeout included, and any failure of libFuzzer itself.
+    if [ -e "$dir/explore-status" ] || [ -n "$(ls -A "$dir/artifacts")" ]; then
+      mkdir -p "$out"
+      cp "$dir/artifacts/"* "$out/" 2>/dev/null || true
+      echo "fuzz: $t FAILED (status $(cat "$dir/explore-status" 2>/dev/null || echo 0)); the end of its log:"
+      grep -vE '^#[0-9]+|^ *NEW_FUNC' "$log" | tail -n 60
+      return 1
+    fi
+    return 0
   fi
-  if [ "$status" != 0 ]; then
-    echo "fuzz: $t FAILED; the end of its log:"
-    grep -vE '^#[0-9]+|^libpng|^ *NEW_FUNC' "$log" | tail -n 60
+  # Fork mode ends with the status of its last job, ignored finding or not: a status without any
+  # finding means libFuzzer itself failed.
+  if [ -e "$dir/explore-status" ] && [ -z "$(ls -A "$dir/artifacts")" ]; then
+    echo "fuzz: $t FAILED: libFuzzer exited with status $(cat "$dir/explore-status") without a finding; the end of its log:"
+    tail -n 40 "$log"
+    return 1
   fi
-  return "$status"
+  if [ "$ours" -gt 0 ]; then
+    echo "fuzz: $t FAILED: $ours finding(s) in envpis's own code"
+    return 1
+  fi
+  return 0
 }
 
 t1=$(date +%s)
@@ -170,7 +227,7 @@ fi
 
 failed=0
 for t in "${TARGETS[@]}"; do
-  report "$t" "${status[$t]}" || failed=1
+  report "$t" || failed=1
 done
 echo "fuzz: fuzzing $(($(date +%s) - t1)) s"
 exit $failed

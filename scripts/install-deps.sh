@@ -7,6 +7,8 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git ca-certificates
   clang libclang-rt-14-dev
+  # llvm-symbolizer: clang's sanitizer runtime symbolizes reports with it (scripts/fuzz.sh needs them)
+  llvm
   # libraries (see DESIGN.md section 6)
   libopenimageio-dev openimageio-tools libembree-dev libtbb-dev libhwy-dev
   libcli11-dev nlohmann-json3-dev libboost-math-dev libassimp-dev libpng-dev
