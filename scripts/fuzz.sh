@@ -40,6 +40,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
+source scripts/fuzz_owner.sh
 
 SECS=${FUZZ_SECONDS:-60}
 GLTF_SECS=${FUZZ_GLTF_SECONDS:-$((SECS * 2 / 3))}
@@ -115,24 +116,15 @@ run_target() {  # run_target <target>: the replay, then the exploration; returns
 }
 
 # classify <target> <input> <report file>: replays the input, writes its report, and prints "ours",
-# "third-party <library>" or "unreproduced". The first stack frame that is at a line of our sources or
-# in a shared library other than the C/C++ runtime decides (the sanitizers' interceptors and libFuzzer
-# live in the fuzz binary and are neither).
+# "third-party <library>" or "unreproduced" (scripts/fuzz_owner.sh decides; a report without any frame
+# of ours or of a library counts as ours, to be looked at).
 classify() {
-  local status=0 frame
+  local status=0 owner
   TMPDIR="$work" ASAN_OPTIONS=$ASAN_FULL timeout 120 "$BUILD/fuzz/$1" -timeout=20 -rss_limit_mb=3072 "$2" \
     >"$3" 2>&1 || status=$?
   if [ "$status" = 0 ]; then echo unreproduced; return; fi
-  frame=$(grep -E '^ +#[0-9]+ ' "$3" |
-          grep -E "$ROOT/(render|src|fuzz|include|apps)/[^ ]*:[0-9]+|\(/[^ ]*\.so[.0-9]*\+0x" |
-          grep -vE '/(libc|libm|libstdc\+\+|libgcc_s|libpthread|libdl)\.so|/ld-linux' | head -n 1 || true)
-  if [[ "$frame" == *"$ROOT/"* ]]; then
-    echo ours
-  elif [ -n "$frame" ]; then
-    echo "third-party $(sed -E 's|.*\(/[^ ]*/([^/ ]*\.so)[.0-9]*\+0x.*|\1|' <<<"$frame")"
-  else
-    echo ours  # a report without any frame of a library or of ours: treat it as ours and look
-  fi
+  owner=$(fuzz_owner "$3" "$ROOT")
+  if [ "$owner" = none ]; then echo ours; else echo "$owner"; fi
 }
 
 report() {  # report <target>: prints what the target did; returns 1 if the run must fail
