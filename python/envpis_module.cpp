@@ -2,6 +2,7 @@
 // message; argument errors are ValueError (raised by the binding files).
 #include <envpis/common.h>
 #include <envpis/equal_area.h>
+#include <envpis/version.h>
 
 #include "module.h"
 
@@ -11,7 +12,7 @@ PYBIND11_MODULE(envpis, m) {
       "envpis: product importance sampling of environment maps (Conty Estevez & Lecocq 2018).\n"
       "Arrays are float32 (other numbers are converted); directions are rows of N x 3 arrays, +Z up.";
   py::register_exception<envpis::Error>(m, "Error", PyExc_RuntimeError);
-  m.attr("__version__") = ENVPIS_VERSION;
+  m.attr("__version__") = envpis::kVersion;  // the CMake project version
   m.def("simd_name", [] { return envpis::to_string(envpis::simd_resolve(envpis::Simd::Best)); },
         "The widest SIMD instruction set this CPU runs (avx512, avx2, sse2), which the module uses.");
   envpis_py::bind_equal_area(m);

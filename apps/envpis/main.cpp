@@ -3,12 +3,15 @@
 #include <cstdio>
 #include <exception>
 
+#include "build_commit.h"
 #include "command.h"
 #include "envpis/envpis.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"envpis: fast product importance sampling of environment maps"};
-  app.set_version_flag("--version", std::string("envpis ") + envpis::kVersion);
+  // "envpis 0.2.0 (commit 1d3bd5d)": the library's version and the commit the command was built from.
+  app.set_version_flag("--version",
+                       std::string("envpis ") + envpis::version() + " (commit " + envpis::app::kBuildCommit + ")");
   app.require_subcommand(1);
   auto& commands = envpis::app::command_registry();
   std::sort(commands.begin(), commands.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
