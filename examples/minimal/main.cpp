@@ -9,6 +9,8 @@
 
 int main(int argc, char** argv) {
   const char* path = argc > 1 ? argv[1] : "/usr/share/blender/datafiles/studiolights/world/sunset.exr";
+  // The library's version (envpis::version(), compiled into it) and the headers' (envpis::kVersion).
+  std::printf("envpis %s (headers %s)\n", envpis::version(), envpis::kVersion);
   try {
     // Once per map: the environment and its two-level importance table (immutable, shareable).
     const envpis::EnvironmentMap map = envpis::EnvironmentMap::load(path);
