@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared fixtures of the benchmarks: the blender maps, their tables, and precomputed arrays of
 // shading points and random numbers (so the timed loops only cycle through memory).
 #pragma once

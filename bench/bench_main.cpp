@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis_bench: Google Benchmark entry point and the shared fixtures.
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Equal-area mapping (Clarberg 2008), both directions: the public scalar overloads called in a loop
 // vs the batched structure-of-arrays versions, through the public dispatch and through each internal
 // kernel set (scalar / SSE2 / AVX2). One iteration maps kBatch points; items = points.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-shading-point product sampling on a realistic table (blender's sunset.exr, T = 12 -> 144 cells).
 // Every timed loop cycles through kRing precomputed shading points (random normal, wo and proxy of a
 // mixed material) so branch predictors and caches see realistic variety. One iteration = one

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ImportanceTable construction (importance image, per-cell CDFs, cones) for the 1024x512 blender maps
 // and a 4096x2048 map (sunset.exr resampled in setup, not timed), with 1 and 2 TBB threads
 // (tbb::global_control), with the peak bound off (peak_ratio 0) and at its default (8). Wall-clock

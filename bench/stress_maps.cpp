@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Writes the sun stress family (tests/stress_maps.h) as lat-long OpenEXR files:
 //   envpis_stress_maps OUT_DIR [WIDTH]
 // one NAME.exr per map, for scripts/stress-bench.sh. The maps are generated, never shipped.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Writes OUT (a .cpp defining envpis::app::kBuildCommit) from TEMPLATE with the short commit hash of the
 # source tree SOURCE_DIR, "+dirty" when tracked files differ from it, or "unknown" outside a git checkout
 # or without git (GIT_EXECUTABLE empty). Run at every build (cmake -P, apps/envpis/CMakeLists.txt);

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Finds what the Python bindings need: a Python 3 interpreter that imports numpy, its development
 # headers, and pybind11's CMake package. Sets ENVPIS_PYTHON_FOUND, and ENVPIS_PYTHON_MISSING to a
 # one-line reason when something is missing.

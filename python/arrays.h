@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // NumPy argument checking for the bindings: every array argument goes through rows() or one_row(),
 // which convert numbers to C-contiguous float32 and raise ValueError (never crash) for anything else.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Batched product sampling over N shading points: one prepare() and one sample() (or pdf()) per point,
 // run across TBB threads with the GIL released, one ProductSampler per thread. Each point's result
 // is exactly what the per-point API returns for it: prepare() depends only on the point.

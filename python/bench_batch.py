@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Batched product sampling from Python against the same loop in C++.
 
     PYTHONPATH=build/python python3 python/bench_batch.py [--points 1000000] [--repeats 5]

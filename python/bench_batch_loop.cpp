@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The C++ side of python/bench_batch.py: the same batched product sampling (prepare + one sample per
 // shading point) as envpis.product_sample, on the inputs the script wrote, timed without Python.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // BsdfProxy (the seven floats and their add_* accumulation) and ProxyOptions.
 #include <envpis/bsdf_proxy.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EnvironmentMap: loaded from a file or built from an H x W x 3 array, evaluated on arrays of directions.
 #include <envpis/environment_map.h>
 

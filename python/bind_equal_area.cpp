@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clarberg's equal-area mapping on arrays of points / directions.
 #include <envpis/equal_area.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ImportanceTable: the two-level table, environment-only sampling and pdf on arrays, and its
 // importance and cell probabilities as arrays (for plots).
 #include <envpis/importance_table.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ProductSampler and its options: the per-shading-point API (prepare once, then sample / pdf on
 // arrays). The batched calls over many shading points are in batch.cpp.
 #include <envpis/product_sampler.h>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Chi-square test of a direction sampler against its pdf, in NumPy only (no SciPy).
 
 Directions are binned on the equal-area square (every bin subtends the same solid angle, 4 pi / R^2).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The module entry point: library errors become envpis.Error (a RuntimeError) with the library's
 // message; argument errors are ValueError (raised by the binding files).
 #include <envpis/common.h>

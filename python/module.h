@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The envpis Python module is assembled from one binding file per library concept.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // BSDF proxies as rows of seven floats for the batched calls: a proxy row is BsdfProxy's fields in
 // declaration order (PROXY_FIELDS), exactly the struct the add_* calls accumulate.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The exact variance analyzer: the variance of the direct integrator's one-sample estimate at a shading
 // point, for each strategy, computed by quadrature instead of by rendering (no Monte Carlo noise).
 //

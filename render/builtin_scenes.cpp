@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The built-in scenes, environments and procedural meshes of render/scenes.h (scene files:
 // render/scene_file.cpp).
 #include <algorithm>

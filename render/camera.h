@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The renderer's camera, built from look-at parameters (+Z is the world's up by default): a pinhole
 // perspective camera, or an orthographic one whose primary rays are all parallel to the view
 // direction. The orthographic camera shows sizes without perspective (technical and product views,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The firefly log: records the individual sample contributions that make fireflies, with what the
 // integrator and the light sampler knew when it made them (docs/fireflies.md uses it to classify them).
 //

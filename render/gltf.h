@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // glTF 2.0 files (.gltf, .glb) for the renderer: geometry and cameras through assimp (Debian
 // libassimp-dev), materials and textures read from the file's JSON (render/pbr_material.h says how
 // they map to lobes). Coordinates: glTF is +Y up, the renderer +Z up; the loader turns the model

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The SplitMix64 finalizer (Steele et al. 2014; Stafford's "mix64" variant): a 64-bit bijection whose
 // output bits each depend on every input bit. The renderer's random numbers are chains of it, keyed on
 // (seed, pixel, sample, dimension), so they never depend on thread or tile order.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The integrators: environment lighting, plus the emission of emissive (glTF) materials, added where a
 // path hits them (they are not light-sampled).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The renderer's materials: weighted sums of lobes, each with eval / sample / pdf, evaluated in the
 // local shading frame (normal = +Z), plus accumulation into the library's BsdfProxy.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Small geometric helpers of the renderer, on top of the library's Vec3 / Rgb value types.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The oracle light distribution: a per-shading-point top level over the cells of a fine light table
 // (48 x 48 by default), each weighted from an estimate of its true share of the integrand
 // g = BSDF x |cos| x radiance (channel average), and inside the chosen cell a distribution over the

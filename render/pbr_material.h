@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // glTF 2.0 metallic-roughness materials (with KHR_materials_clearcoat, _transmission, _ior and
 // _emissive_strength) mapped to the renderer's lobes, optionally textured.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The render API: one call renders a scene with one strategy and returns the image, an object-id AOV
 // and timings. Used by `envpis render` and by tools that compare strategies (`envpis compare`).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The random numbers of one pixel sample: independent uniform numbers, or Owen-scrambled Sobol points
 // (render/sobol.h), the default.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The renderer's scene: materials, objects (analytic spheres and triangle meshes) in an Embree 3
 // scene, a camera and the environment map that lights everything.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON scene files (docs/scene-format.md) and load_scene of render/scenes.h.
 #include "render/scenes.h"
 

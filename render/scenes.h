@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenes: the built-in test scenes after the paper's figures, the procedural sky, and scene files
 // (JSON, documented in docs/scene-format.md).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Owen-scrambled Sobol points in one and two dimensions, with hash-based nested uniform scrambling
 // (Burley 2020, "Practical Hash-based Owen Scrambling"; the Laine-Karras style hash with the
 // constants of Vegdahl 2021).

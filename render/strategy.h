@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The light-sampling strategies compared by the renderer. Each is a pair of
 // (light distribution, whether BSDF sampling is combined with it by MIS):
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Image textures of the renderer's materials: RGBA float texels in linear space, bilinear filtering,
 // glTF wrap modes and the KHR_texture_transform UV transform.
 //

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Plots of an `envpis compare` run, for its report (index.html).
 
     python3 report/plots.py DIR/metrics.json

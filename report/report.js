@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis compare report: builds the page from the metrics embedded in index.html (the same data as
 // metrics.json). Inlined by `envpis compare`; no external resource. Linked zoom: hovering over any image
 // moves one square region in every image of the page, shown magnified in the inset strips; a click

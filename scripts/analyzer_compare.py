@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Compares product sampler configurations with `envpis analyze` runs over the 8 blender maps.
 
     for m in sunrise sunset studio interior city courtyard forest night; do

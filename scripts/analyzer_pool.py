@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Pools `envpis analyze --json` files of several maps into the tables of docs/analyzer.md.
 
     for m in sunrise sunset studio interior city courtyard forest night; do

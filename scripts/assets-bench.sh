@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The asset-scene evidence of docs/assets.md (issue 12): `envpis compare` of every scenes/assets-*.json
 # under each map (the 8 blender-data maps and the @pmndrs/assets HDRIs of scripts/fetch-assets.sh), the
 # path integrator, the default (Sobol) sampler, strategies mis, mis-comp and product, equal spp and

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Aggregates the `envpis compare` runs of scripts/assets-bench.sh (asset scenes x maps, path integrator,
 medians over seeds) into the markdown tables of docs/assets.md:
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the Google Benchmark micro-benchmarks (Release, own build directory, no -march=native: the
 # library dispatches SSE2 / AVX2+FMA at run time) and runs them with the flags BENCHMARKS.md quotes.
 # Extra arguments go to envpis_bench (e.g. --benchmark_filter=Product). JSON lands in $BUILD/bench.json.

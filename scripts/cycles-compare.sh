@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Cycles (Debian's Blender 3.4) side by side with envpis on matched sphere scenes: each renderer against its
 # own converged reference, at equal time. See docs/cycles.md for the matched settings and the conventions.
 #

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Cycles side by side with envpis on matched sphere scenes (issue 11, item 5; docs/cycles.md).
 
 Run it through scripts/cycles-compare.sh, which finds or installs Blender and the tools. For each map and

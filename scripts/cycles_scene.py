@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Runs inside Blender (bpy), driven by scripts/cycles_compare.py; see docs/cycles.md.
 #
 #   blender -b --factory-startup --python scripts/cycles_scene.py -- \

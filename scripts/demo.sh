@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job: installs the Debian packages, builds the envpis command in Release and runs the default
 # comparison: fig1 (eight spheres, GGX roughness 0.02 to 0.5, diffuse, glass) under blender-data's
 # sunset.exr, direct lighting, strategies mis, mis-comp, product and oracle at equal spp and at equal

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fetches the CC0 models and HDRIs of the asset scenes (docs/assets.md) from the npm package
 # @pmndrs/assets, which stores each file base64-encoded inside a .js module, and decodes them into a
 # cache outside the repository:

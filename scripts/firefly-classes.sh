@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The firefly diagnosis of docs/fireflies.md (issue 9): fig1, direct lighting, 64 spp, strategies mis and
 # product, with the table's peak bound off (--peak-ratio 0) and on (8), over a few generated stress maps
 # (tests/stress_maps.h) and sunrise.exr, seeds 0 .. SEEDS-1 against one cached 1024-spp reference per map

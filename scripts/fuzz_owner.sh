@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced by scripts/fuzz.sh (and its test, tests/fuzz_owner_test.sh): who owns a sanitizer report.
 #
 # fuzz_owner <report file> <repository root>: prints "ours", "third-party <library>.so" or "none" for

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs every Debian 12 package envpis needs to build, test, benchmark and render.
 # Idempotent: packages already present are left alone. Needs root (or sudo).
 set -euo pipefail

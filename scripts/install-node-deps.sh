@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs the browser test's npm packages (tests/browser: playwright-core, which drives Debian's
 # /usr/bin/chromium; no browser is downloaded) from tests/browser/package-lock.json. Idempotent: does
 # nothing when the locked version is already installed. Needs node and npm (Debian: nodejs, npm).

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The oracle's gap by the analyzer (BENCHMARKS.md, "The oracle as a limit").
 
 Usage: oracle_gap.py ON_DIR [OFF_DIR]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The BENCHMARKS.md comparison table: `envpis compare` of fig1 (direct lighting) under each of the eight
 # blender-data maps (/usr/share/blender/datafiles/studiolights/world/*.exr), strategies mis, mis-comp,
 # product and oracle at equal spp and at equal time, then scripts/paper_table.py aggregates the eight

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Aggregates `envpis compare` runs of fig1 (one per environment map) into the markdown tables of
 BENCHMARKS.md: relMSE ratios per roughness at equal spp and at equal time, the overhead ratio, the gap
 to the oracle, and the issue's targets with met / not met.

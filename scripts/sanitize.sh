@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Sanitizer runs (a CI step, after scripts/test.sh), each in its own build directory, with GCC (the
 # project's compiler; the fuzzers in scripts/fuzz.sh are the clang builds):
 #

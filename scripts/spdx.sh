@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The one-line license identifier at the top of every source file of ours (LICENSE: Apache-2.0).
 #   scripts/spdx.sh --check   lists the files without it and exits 1 if there are any (a CTest test)
 #   scripts/spdx.sh --fix     inserts it where it is missing, in the file type's comment syntax

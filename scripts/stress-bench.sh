@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The firefly tail table (issue 9): fig1, direct lighting, 64 spp, strategies mis and product, over the
 # generated sun stress family (tests/stress_maps.h, written by bench/envpis_stress_maps) and the eight
 # blender maps, with --seeds 3 (medians over seeds) against a 2048-spp reference of another seed.

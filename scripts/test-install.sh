@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Checks the installed CMake package the way an outside project sees it: installs BUILD_DIR into a
 # temporary prefix, checks its version file accepts the build's minor version and refuses the others,
 # configures examples/minimal against it (find_package(envpis 0.2 CONFIG REQUIRED)), builds it and runs

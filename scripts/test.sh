@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The test command: installs the Debian packages, builds in Release, runs the default test suite
 # (everything but the `sweep` label) and checks the installed CMake package with examples/minimal.
 set -euo pipefail

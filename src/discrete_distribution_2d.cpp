@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "envpis/discrete_distribution_2d.h"
 
 #include "envpis_assert.h"

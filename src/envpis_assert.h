@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: ENVPIS_ASSERT(condition) checks an invariant of the library's own code in debug builds
 // (NDEBUG not defined) and compiles to nothing in release builds, so it may sit on hot paths.
 // A failure names the file, line and condition, then aborts: it is a bug in envpis, never a user

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "envpis/equal_area.h"
 
 #define ENVPIS_KERNEL_NS scalar

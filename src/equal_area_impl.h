@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: Clarberg's equal-area square <-> sphere mapping, one body for `float` (the scalar reference,
 // also behind the public scalar functions) and for every SIMD width, plus its batched loops.
 // Included per instruction set inside ENVPIS_KERNEL_NS (see simd_ops.h).

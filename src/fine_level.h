@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the importance table's fine level. The equal-area square is cut into C x C cells of F x F
 // texels each (N = C F texels per side; the cells are the table's top cells, or its sub-cells when it
 // has them); every cell has its own distribution over its texels, independent of the others, so a

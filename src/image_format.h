@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: names of the image formats environment maps come in, shared by EnvironmentMap's warnings
 // (core) and its loader (envpis::io).
 #pragma once

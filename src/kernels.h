@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the vectorized kernels and their run-time dispatch.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Compiled with -mavx2 -mfma (see src/CMakeLists.txt): 8 float lanes. Only called when the CPU has both.
 #define ENVPIS_KERNEL_NS avx2
 #include "kernels_impl.inl"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Compiled with -mavx512f -mavx512dq -mavx512vl -mfma (see src/CMakeLists.txt): 16 float lanes. Only
 // called when the CPU has them.
 #define ENVPIS_KERNEL_NS avx512

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: one instruction set's kernel table, included once per set with ENVPIS_KERNEL_NS set (the
 // scalar reference in equal_area.cpp, SSE2, AVX2, AVX-512 in their own translation units).
 #include "equal_area_impl.h"

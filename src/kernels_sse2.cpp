@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Compiled with the default x86-64 baseline (SSE2): 4 float lanes.
 #define ENVPIS_KERNEL_NS sse2
 #include "kernels_impl.inl"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the table build's one parallel loop, over TBB when the library is built with it
 // (ENVPIS_WITH_TBB, the default) and serial otherwise, so the core has no required threading library.
 // fn(begin, end) processes the half-open range [begin, end); ranges never overlap.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "envpis/product_sampler.h"
 
 #include <algorithm>

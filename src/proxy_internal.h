@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: PreparedProxy -> the kernels' LobeParams.
 #pragma once
 

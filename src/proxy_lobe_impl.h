@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the proxy lobes' shapes evaluated over a top cell's bounding cone (kernels.h, LobeParams),
 // one body for `float` (PreparedProxy::eval_cone) and for every SIMD width, and the product weights
 // loop over the cells. Included per instruction set inside ENVPIS_KERNEL_NS (see simd_ops.h).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: a handful of operations written once for `float` (the scalar reference) and for
 // std::experimental::simd<float, Abi> (SSE2 / AVX2 / AVX-512 lanes), so every kernel has one source.
 // Included once per instruction set, inside that set's own namespace (ENVPIS_KERNEL_NS), so that no

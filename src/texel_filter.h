@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: bilinear reconstruction of a map's texels, written once for any texel type that adds and
 // scales (Rgb for EnvironmentMap::eval, float for the importance table's look-ups). at(x, y) returns
 // texel (x, y); (u, v) are texture coordinates in [0,1]^2, texel centres at half-integers.

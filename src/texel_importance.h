@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the importance of every fine texel of the table (the rule is documented in
 // importance_table.h): a gather of stratified bilinear look-ups, a splat of the map's texels where they
 // are small, the peak bound, then the floor (or the MIS compensation).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: an upper bound of what the map's reconstruction (EnvironmentMap::eval, bilinear or nearest) returns
 // inside each texel of an N x N grid over the world's equal-area square.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared chi-square goodness-of-fit harness for direction samplers (after Mitsuba 3's chi2 test).
 //
 // Bins are a B x B grid on Clarberg's equal-area square, so every bin subtends the same solid angle.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Checks scripts/fuzz_owner.sh, which decides whether a finding of the fuzzers' exploration fails CI
 # (ours) or is only kept (third-party): canned reports shaped like clang 14's symbolized ones.
 set -euo pipefail

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenes shared by the renderer's tests: one sphere under a given sky, and a one-lobe material.
 #pragma once
 

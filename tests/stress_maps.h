@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sun stress family: lat-long skies with small, very bright discs where samplers break: on the
 // lat-long seam, at the poles, on the horizon, on top-cell boundaries and corners of the default 12 x 12
 // table, inside one fine texel, and two suns of very different size. Generated, never shipped; used by

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Every bad environment file through all three commands that read one (`envpis table`, `render` and
 // `compare`), run as a user would: zero-byte, truncated and corrupt EXR and HDR, wrong extensions,
 // a directory, a FIFO, a missing or unreadable path, a header claiming 8M-texel scanlines,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `envpis table` end to end: runs the built command on a blender-data map and on bad inputs, and checks
 // exit codes, one-line error messages, and the pictures and summary.json it writes.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `envpis --version`: one line "envpis VERSION (commit HASH)" and exit 0, the version being the library's
 // (the CMake project version, envpis/version.h) and the commit the one the command was built from.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `envpis compare`, run as a command: clean one-line errors for bad options, and a small comparison
 // whose metrics.json is checked against the images it wrote (relMSE and the tail recomputed from the EXR
 // files with OpenImageIO, per image and per object), the reference cache, and the report files. Also its

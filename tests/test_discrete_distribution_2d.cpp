@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // DiscreteDistribution2D (the top levels), CumulativeDistribution2DView (the fine level) and the two-level path of ImportanceTable: probabilities,
 // sampling frequencies (chi-square), and sample -> invert round trips.
 #include <gtest/gtest.h>

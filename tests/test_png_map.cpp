@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PNG environment maps: decoded by libpng directly (src/io/png_decode.h), with the values OpenImageIO's
 // reader gave before (code value / max code), and one clean error line for a corrupt file.
 #include <gtest/gtest.h>

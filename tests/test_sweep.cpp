@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The statistical sweep (label `sweep`, not in the default run): chi-square goodness of fit of the
 // product sampler over 1000 random (map, top resolution, proxy, normal, outgoing direction, mixture)
 // configurations, with a Sidak correction for the family, plus a check that the 1000 p-values are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared helpers for the tests: synthetic maps, the blender-data maps, a fixed-seed RNG, a scratch
 // directory.
 #pragma once

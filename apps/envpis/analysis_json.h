@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The exact variance analyzer's results as JSON (docs/analyzer.md, "JSON"): what `envpis analyze --json`
 // writes and what `envpis compare` puts under "analysis" in metrics.json, for its report.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis analyze: the exact variance of each strategy's one-sample direct estimate at shading points of
 // a scene, by quadrature (render/analyzer.h): no rendering, no Monte Carlo noise. Prints a table and
 // writes every number to JSON (docs/analyzer.md).

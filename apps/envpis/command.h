@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The envpis command's subcommands register themselves here: one file per subcommand
 // (table.cpp, render.cpp, compare.cpp, ...), each with a static RegisterCommand object.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis compare: renders a reference and every strategy at equal samples (and at equal time), measures
 // relMSE per image and per object, the overhead of product over mis and a convergence series, and
 // writes DIR/metrics.json, every image (EXR + tonemapped PNG + false-colour error map) and the report

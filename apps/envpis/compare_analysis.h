@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Step 9 of `envpis compare`: the exact variance analysis (render/analyzer.h) of the scene and map it
 // renders, at --analysis-points first-hit points per object, with the run's own tables and sampling
 // options. The compared strategies are analyzed, and env and product besides when they are not compared:

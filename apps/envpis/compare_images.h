@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The images of `envpis compare` under DIR/images: every render as float OpenEXR and as a tonemapped
 // PNG, each measured render's false-colour error map, and the object-id AOV.
 #pragma once

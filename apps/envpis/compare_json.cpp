@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #ifdef ENVPIS_HAVE_RENDER
 #include "compare_json.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // metrics.json of `envpis compare`: the settings of the run, the reference, the regions, every measured
 // strategy (with the medians and spread over the seeds), the overhead and the convergence series. The
 // report (report.h) adds the plots' manifest and embeds the whole in index.html.

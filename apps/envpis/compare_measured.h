@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What `envpis compare` measures: the objects' pixel sets (regions) and each strategy's renders measured
 // against the reference (metrics.h), once per seed.
 #pragma once

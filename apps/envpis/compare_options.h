@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The options of `envpis compare`: as typed (CompareArgs, registered on the subcommand) and checked
 // (CompareSettings). Every check runs before anything slow, and every error is one line naming its
 // option.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What every render of one `envpis compare` run shares: the scene, the sampling options at the
 // comparison's image size, each strategy's tables (built once, before its first render, and reported
 // apart from the sampling time) and the progress lines.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The measuring steps of `envpis compare`, in the order a run takes them (compare.cpp): the reference
 // (cached), every strategy at equal spp (timing repeated, more seeds), the overhead of product over
 // mis, the convergence series, and every strategy at equal time.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis: the command-line front end (table, render, compare, ...).
 #include <algorithm>
 #include <cstdio>

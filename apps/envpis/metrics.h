@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Image error metrics of `envpis compare`: an image against the reference, over the whole image and over
 // each object's pixels (docs/cli.md, "envpis compare", Method). Every metric derives from one per-pixel
 // quantity, the relative squared error e = mean over the three channels of (I - R)^2 / (R^2 + 0.01):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Option parsing shared by the envpis subcommands: strict numbers whose errors are one line naming the
 // option ("--spp: must be in 1..16777216, got '0'"), and the scene / environment / sampling options that
 // `envpis render` and `envpis compare` both take.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pictures the envpis commands write for a person to look at: a display-referred RGB image with a few
 // drawing primitives, the inferno colour map, the sRGB encoding and 8-bit PNG writing. `envpis table`
 // draws its importance pictures with them, `envpis compare` its tonemapped images and error maps.

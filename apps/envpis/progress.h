@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Progress lines on stderr, "[  12.3s] what happened", timed from the start of a command; silent when
 // quiet.
 #pragma once

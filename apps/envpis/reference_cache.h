@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference of `envpis compare` and its cache: <cache>/ref-<hash>.exr (R, G, B, variance) and
 // ref-<hash>.json, whose "key" holds everything that changes the reference image (the hash is of the
 // key: a reference is reused only when every entry matches).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis render: renders a built-in or file scene with one sampling strategy to a float OpenEXR.
 #ifdef ENVPIS_HAVE_RENDER
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The HTML report of a command's results (today `envpis compare`'s): DIR/index.html is
 // report/template.html with report/report.css, report/report.js and the results JSON embedded, so it
 // opens from the file system with no server; the plots are drawn by report/plots.py (matplotlib) into

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis table: builds the importance table of an environment map, prints its figures (size, build
 // time, memory) and writes pictures of it that a person can look at:
 //   map.png              the environment map itself, tonemapped, in its own layout

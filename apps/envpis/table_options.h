@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The options of `envpis table`: as typed (TableArgs, registered on the subcommand), and checked
 // (TableSettings), every error one line naming its option, all before anything slow.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pictures of `envpis table`: the map in its own layout, the fine importance and the T x T cell
 // probabilities on the equal-area square, with the horizon, the shading normal and the proxy's lobe axes
 // drawn over them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The smallest complete use of envpis: load a map, build its importance table, describe a material
 // with a BSDF proxy, prepare the product sampler at a shading point, draw product samples.
 #include <envpis/envpis.h>

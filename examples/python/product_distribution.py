@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """envpis from Python: load a Blender environment map, plot its importance table and one shading
 point's product distribution, draw a million product samples and check them against pdf() with a
 chi-square test.

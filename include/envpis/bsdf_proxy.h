@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The BSDF proxy of Conty Estevez & Lecocq (2018), section 3: seven floats that summarize a
 // multi-lobe BSDF for shaping the light-sampling distribution (never for shading).
 //

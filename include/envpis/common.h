@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis: small value types shared by every part of the library.
 // The library uses its own minimal vector types so that it depends on no renderer's math library;
 // converting from yours is three floats.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A discrete distribution over the cells of a w x h grid that also hands back where inside its cell a
 // sample landed, so a second level (a fine table, a warp) can reuse the remainder of u and stratified
 // u stay stratified (as pbrt-v4's PiecewiseConstant2D and Mitsuba's DiscreteDistribution2D do).

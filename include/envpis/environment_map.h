@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An HDR environment map: linear RGB radiance over the sphere of directions, read from the user's
 // own image file and evaluated with bilinear filtering of its pixels (or nearest-texel look-up).
 //

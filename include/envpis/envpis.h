@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // envpis: fast product importance sampling of environment maps
 // (Conty Estevez & Lecocq, SIGGRAPH 2018 Talks). The umbrella header.
 //

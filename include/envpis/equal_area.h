@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Clarberg's equal-area mapping between the unit square [0,1]^2 and the unit sphere
 // (P. Clarberg, "Fast Equal-Area Mapping of the (Hemi)Sphere using SIMD", JGT 13(3), 2008).
 //

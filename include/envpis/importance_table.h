@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The two-level importance table of an environment map (Conty Estevez & Lecocq 2018, section 2).
 //
 // Both levels live on the equal-area square, so every cell of a level subtends the same solid angle.

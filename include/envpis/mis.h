@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Multiple importance sampling weights (Veach 1997) for combining the product (or environment)
 // light sample with a BSDF sample: weight of a sample drawn from strategy f with n_f samples, when
 // strategy g with n_g samples could also have produced it.

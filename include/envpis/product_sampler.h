@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-shading-point product importance sampling of environment x BSDF proxy
 // (Conty Estevez & Lecocq 2018, section 4).
 //

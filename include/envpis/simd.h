@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The instruction set of the library's vector kernels (the batched equal-area mapping and the product
 // sampler's per-shading-point weights). Every kernel set computes the same function as the scalar
 // reference (tests/test_product_sampler.cpp checks each one this CPU runs); the choice only trades

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared fixtures: small synthetic maps built with numpy (a bright sun on a sky gradient), in both
 layouts, and their tables. PYTHONPATH must hold the build's python/ directory (CTest sets it)."""
 import numpy as np

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The batched calls return exactly what the per-point API returns for each shading point, whatever
 the thread count and however the inputs are given."""
 import numpy as np

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Chi-square tests of the samplers through the bindings: samples binned on the equal-area square
 against the bins' integrated pdf (envpis_chi2). Fixed seeds; a correct sampler fails one of these
 with probability 1e-3 each."""

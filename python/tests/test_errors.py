@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Bad input raises a Python exception (ValueError for shapes and dtypes, envpis.Error with the
 library's message for what the library refuses); nothing crashes."""
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """EnvironmentMap and ImportanceTable through the bindings: both layouts from arrays, a real map from
 Blender's data, the equal-area mapping on arrays."""
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """envpis.__version__ is the CMake project version, read here from the top-level CMakeLists.txt so that
 bumping project(envpis VERSION ...) without rebuilding the module, or a module that invents its own
 version, fails."""

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Coated diffuse: a rough dielectric coat (GGX alpha, IOR eta) over a Lambertian base of albedo R.
 //
 // The approximation (an analytic layered model, not a stochastic walk through the layers):

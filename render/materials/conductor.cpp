@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // GGX microfacet conductor (Cook-Torrance with the height-correlated Smith G2):
 //   f(wo, wi) = F(wo.m) D(m) G2(wo, wi) / (4 |cos theta_o| |cos theta_i|),  m = normalize(wo + wi),
 // with F the exact conductor Fresnel of a complex IOR eta + i k, or Schlick's from an RGB f0.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rough GGX dielectric interface with reflection and refraction (Walter, Marschner, Li, Torrance,
 // "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Diffuse lobes, f = C / pi: Lambertian reflection into wo's hemisphere (two-sided: a surface seen
 // from below reflects into the lower hemisphere) or diffuse transmission into the opposite one. Both
 // are sampled with a cosine-weighted hemisphere on their side, and both are symmetric in wo and wi,

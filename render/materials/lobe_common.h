@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Small helpers shared by the lobe implementations in render/materials/ (not part of the API).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Material: a weighted sum of lobes.
 //   eval(wo, wi) = sum_k w_k f_k(wo, wi)
 //   sample: lobe k is chosen with probability P_k = w_k albedo_k(wo) / sum_j w_j albedo_j(wo) (using uc,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared GGX microfacet and Fresnel helpers for the lobes in render/materials/.
 //
 // Everything works in the local shading frame (normal = +Z) on unit vectors. The GGX distribution is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Browser test of an `envpis compare` report: opens DIR/index.html from the file system in headless
 // Chromium (Debian's /usr/bin/chromium, driven by playwright-core) and checks that
 //   - the page loads with no console error, no uncaught exception and no failed request,

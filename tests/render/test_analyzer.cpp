@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the exact variance analyzer (render/analyzer.h) and `envpis analyze`:
 //   - its variance agrees with the sample variance of the renderer's own one-sample direct estimates
 //     (Integrator::li with the strategies' LightSamplers), within a confidence interval built from the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the glTF / textured-material path (render/gltf.h, render/pbr_material.h,
 // render/texture.h) and of the asset scenes in scenes/assets-*.json (docs/assets.md):
 //   - every asset scene loads (a missing asset is a failure, never a skip) and renders finite pixels,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The firefly log (render/firefly_log.h) on a map made to produce fireflies: a tiny, very bright sun
 // (many of them: the stress family's sky with 48 suns of 0.4 degrees at 2e4, tests/stress_maps.h) under
 // the old table (peak bound off, RenderOptions::light_table.peak_ratio = 0):

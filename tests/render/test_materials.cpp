@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the renderer's materials (render/material.h, render/materials/): the GGX and Fresnel
 // helpers, a chi-square test of every lobe's sampler and of multi-lobe materials, reciprocity, energy
 // (Monte-Carlo and quadrature albedos), sample/eval/pdf consistency, degenerate inputs, proxy

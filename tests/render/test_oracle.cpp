@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the oracle strategy (render/oracle.h):
 //   - its pdf is the density of its samples (chi-square, tests/chi2.h) for a sharp and a medium glossy
 //     lobe, a diffuse surface and a closed glass sphere under a small bright sun;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Correctness tests of the renderer (render/render.h, render/strategy.h, render/scenes.h):
 //   - every strategy converges to the same per-sphere means on a small fig1 as a high-sample reference
 //     rendered with a different strategy (z-test, Bonferroni-corrected),

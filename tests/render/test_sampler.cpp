@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The renderer's pixel samplers: the Sobol generator against Boost's, the net property of the
 // scrambled, shuffled pairs, determinism, and convergence through the library's warps.
 #include <gtest/gtest.h>
