@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the renderer's glTF loader (render/gltf.h, load_gltf) on arbitrary file contents.
 //
 // Input layout: the bytes of one glTF file, written to a temporary file named input.glb when they

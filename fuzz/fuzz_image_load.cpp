@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: EnvironmentMap::load on arbitrary file contents.
 //
 // Input layout: byte 0 selects the file name extension (low 4 bits), the layout option (bits 4-5) and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: ImportanceTable build, environment-only sampling and ProductSampler
 // prepare/sample/pdf from arbitrary bytes.
 //

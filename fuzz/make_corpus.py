@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Regenerates the seed corpora in fuzz/corpus/ (needs oiiotool from openimageio-tools), or writes the
 glTF seeds taken from Debian's assimp-testmodels into a directory (what scripts/fuzz.sh does at run time).
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan, library instrumented too) in build-fuzz
 # and runs each in two phases, on a copy of its seed corpus in a temporary directory (new inputs never
 # land in the repository):

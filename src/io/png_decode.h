@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // PNG environment maps, decoded by libpng's simplified API instead of OpenImageIO's PNG reader.
 //
