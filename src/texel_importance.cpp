@@ -33,11 +33,13 @@ struct Setup {
       : map(m), fine(f), w(m.width()), h(m.height()), N(f.resolution()), latlong(m.layout() != MapLayout::EqualArea),
         total(static_cast<std::size_t>(N) * N), table_texel_sr(4.0 * kPi / double(total)),
         ea_src_sr(4.0 * kPi / (double(w) * h)), lum(static_cast<std::size_t>(w) * h) {
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const Rgb L = map.texel(x, y);
-        lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
-      }
+    parallel_for(0, h, [&](int begin, int end) {
+      for (int y = begin; y < end; ++y)
+        for (int x = 0; x < w; ++x) {
+          const Rgb L = map.texel(x, y);
+          lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
+        }
+    });
   }
   float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
   // Bilinear look-up of the channel average for a world direction, as EnvironmentMap::eval does it,
@@ -260,13 +262,7 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   }
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
   if (options.peak_ratio > 0) {
-    const std::vector<float> peaks = texel_peaks(map, su.lum, su.N);
-    const float inv_k = 1.0f / options.peak_ratio;
-    for (int y = 0; y < su.N; ++y)
-      for (int x = 0; x < su.N; ++x) {
-        float& v = func[fine.index(x, y)];
-        v = std::max(v, peaks[static_cast<std::size_t>(y) * su.N + x] * inv_k);
-      }
+    raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
   }
   double sum = 0;
   for (float v : func) sum += v;
