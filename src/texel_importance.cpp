@@ -11,9 +11,6 @@
 #include "texel_filter.h"
 #include "texel_peak.h"
 
-#define ENVPIS_KERNEL_NS scalar
-#include "simd_ops.h"
-
 namespace envpis::detail {
 
 namespace {
@@ -42,19 +39,13 @@ struct Setup {
     });
   }
   float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
-  // Bilinear look-up of the channel average for a world direction, as EnvironmentMap::eval does it,
-  // with a fast polynomial atan2 for the lat-long angles.
+  // Bilinear look-up of the channel average for a world direction, through the same mapping as
+  // EnvironmentMap::eval.
   float lookup(Vec3 world) const {
     const Vec3 md = map.to_map(world);
     const auto at = [this](int x, int y) { return lum_at(x, y); };
-    if (!latlong) {
-      const Point2 p = equal_area_sphere_to_square(md);
-      return bilinear_equal_area(at, w, p.x, p.y);
-    }
-    float phi = scalar::simd::atan2_fast(md.y, md.x);
-    if (phi < 0) phi += 2 * kPi;
-    const float theta = scalar::simd::atan2_fast(std::sqrt(md.x * md.x + md.y * md.y), md.z);
-    return bilinear_latlong(at, w, h, phi * (0.5f * kInvPi), theta * kInvPi);
+    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
+    return latlong ? bilinear_latlong(at, w, h, p.x, p.y) : bilinear_equal_area(at, w, p.x, p.y);
   }
 };
 
