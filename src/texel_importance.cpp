@@ -112,8 +112,30 @@ struct SplatRow {
   std::vector<float> u, v, e;
 };
 
+// Azimuth cosines and sines of the sub-texel columns (x + (i + 0.5) / kx) / w of a lat-long map split
+// kx ways, entry x * kx + i: latlong_to_direction's own values (its point at theta = pi / 2, where
+// sin theta is exactly 1), so a point s * cos, s * sin, c is the one it returns, bit for bit, with
+// the row's sin and cos computed once instead of per point.
+struct SplitColumns {
+  std::vector<float> cos_phi, sin_phi;
+};
+
+SplitColumns split_columns(int w, int kx) {
+  SplitColumns c;
+  c.cos_phi.resize(static_cast<std::size_t>(w) * kx);
+  c.sin_phi.resize(c.cos_phi.size());
+  for (int x = 0; x < w; ++x)
+    for (int i = 0; i < kx; ++i) {
+      const Vec3 d = latlong_to_direction({float((x + (i + 0.5) / kx) / w), 0.5f});
+      c.cos_phi[static_cast<std::size_t>(x) * kx + i] = d.x;
+      c.sin_phi[static_cast<std::size_t>(x) * kx + i] = d.y;
+    }
+  return c;
+}
+
 void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const std::vector<float>& col_sin,
-               SplatRow& out, std::vector<float>& mx, std::vector<float>& my, std::vector<float>& mz) {
+               const std::vector<SplitColumns>& split, SplatRow& out, std::vector<float>& mx,
+               std::vector<float>& my, std::vector<float>& mz) {
   int kx, ky;
   splat_splits(su, y, kx, ky);
   const int w = su.w, h = su.h;
@@ -126,12 +148,16 @@ void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const 
                                      : su.ea_src_sr / (double(kx) * ky);
     const float st = static_cast<float>(std::sin(kPi * 0.5 * (v0 + v1)));
     const float ct = static_cast<float>(std::cos(kPi * 0.5 * (v0 + v1)));
+    const Vec3 row = su.latlong ? latlong_to_direction({0.0f, float(0.5 * (v0 + v1))}) : Vec3{};  // {sin, 0, cos}
     for (int x = 0; x < w; ++x) {
       const float e = static_cast<float>(double(su.lum_at(x, y)) * sub_sr);
       for (int i = 0; i < kx; ++i, ++k) {
         Vec3 md;
         if (su.latlong && kx == 1) {
           md = {st * col_cos[x], st * col_sin[x], ct};
+        } else if (su.latlong) {  // latlong_to_direction(uv) of the point below
+          const std::size_t c = static_cast<std::size_t>(x) * kx + i;
+          md = {row.x * split[kx].cos_phi[c], row.x * split[kx].sin_phi[c], row.z};
         } else {
           const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
           md = su.latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv);
@@ -187,13 +213,20 @@ std::vector<double> splat(const Setup& su) {
     col_cos[x] = static_cast<float>(std::cos(phi));
     col_sin[x] = static_cast<float>(std::sin(phi));
   }
+  // The split columns of every kx that a row uses (lat-long only).
+  std::vector<SplitColumns> split(17);
+  for (int y = 0; y < su.h && su.latlong; ++y) {
+    int kx, ky;
+    splat_splits(su, y, kx, ky);
+    if (kx > 1 && split[kx].cos_phi.empty()) split[kx] = split_columns(su.w, kx);
+  }
   const int chunk = std::max(1, std::min(su.h, (1 << 18) / su.w));
   std::vector<SplatRow> rows(chunk);
   for (int y0 = 0; y0 < su.h; y0 += chunk) {
     const int y1 = std::min(su.h, y0 + chunk);
     parallel_for(y0, y1, [&](int row_begin, int row_end) {
       std::vector<float> mx, my, mz;
-      for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, rows[y - y0], mx, my, mz);
+      for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, split, rows[y - y0], mx, my, mz);
     });
     for (int y = y0; y < y1; ++y) splat_accumulate(su, rows[y - y0], out);
   }
