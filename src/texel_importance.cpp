@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "envpis/equal_area.h"
+#include "envpis_assert.h"
 #include "parallel.h"
 #include "texel_filter.h"
 #include "texel_peak.h"
@@ -277,13 +278,16 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   const std::vector<double> splatted = splat(su);
   // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
   // (so a texel that sees light by either route keeps a positive density).
+  // Every texel is written (FineLevel sized and zeroed the array): no second fill.
   std::vector<float>& func = fine.values();
-  func.assign(su.total, 0.0f);
-  for (std::size_t i = 0; i < su.total; ++i) {
-    const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
-    const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
-    func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
-  }
+  ENVPIS_ASSERT(func.size() == su.total);
+  parallel_for(0, su.N, [&](int row_begin, int row_end) {
+    for (std::size_t i = std::size_t(row_begin) * su.N; i < std::size_t(row_end) * su.N; ++i) {
+      const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
+      const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
+      func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
+    }
+  });
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
   if (options.peak_ratio > 0) {
     raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
