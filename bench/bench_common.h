@@ -24,6 +24,9 @@ const envpis::EnvironmentMap& sunset_map();
 const envpis::EnvironmentMap& studio_map();
 /// sunset.exr resampled (bilinear, through EnvironmentMap::eval_texture) to 4096 x 2048.
 const envpis::EnvironmentMap& sunset_4k_map();
+/// A synthetic clear sky with a small sun (no file needed), 4096 x 2048 and 8192 x 4096.
+const envpis::EnvironmentMap& sky_4k_map();
+const envpis::EnvironmentMap& sky_8k_map();
 const envpis::ImportanceTable& sunset_table();
 /// The same map's table with 4 x 4 sub-cells per top cell (the refined product's).
 const envpis::ImportanceTable& sunset_table_subcells();

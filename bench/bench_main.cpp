@@ -49,6 +49,46 @@ const EnvironmentMap& sunset_4k_map() {
   return m;
 }
 
+namespace {
+// A clear sky: a gradient brighter towards the zenith, a dark ground, and a sun of the real sun's
+// angular radius (0.27 degrees, a few texels across at 4096 x 2048) at 30 degrees elevation; each
+// texel the average over 2 x 2 points so that the sun's rim is partly covered, as in a photograph.
+EnvironmentMap make_sky(int w, int h) {
+  std::vector<float> rgb(static_cast<std::size_t>(w) * h * 3);
+  const float t = (90.0f - 30.0f) * kPi / 180, p = 0.3f;
+  const Vec3 sun{std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+  const float cos_r = std::cos(0.27f * kPi / 180);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        float acc[3] = {0, 0, 0};
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i) {
+            const Vec3 d = latlong_to_direction({(x + (i + 0.5f) / 2) / w, (y + (j + 0.5f) / 2) / h});
+            const float up = std::max(0.0f, d.z);
+            float c[3] = {0.4f + 0.6f * up, 0.6f + 0.6f * up, 1.0f + 0.8f * up};
+            if (d.z < 0) c[0] = c[1] = c[2] = 0.15f;
+            if (dot(d, sun) >= cos_r) c[0] = c[1] = c[2] = 5e4f;
+            for (int k = 0; k < 3; ++k) acc[k] += 0.25f * c[k];
+          }
+        float* px = &rgb[(static_cast<std::size_t>(y) * w + x) * 3];
+        for (int k = 0; k < 3; ++k) px[k] = acc[k];
+      }
+  });
+  return EnvironmentMap::from_pixels(w, h, std::move(rgb));
+}
+}  // namespace
+
+const EnvironmentMap& sky_4k_map() {
+  static const EnvironmentMap m = make_sky(4096, 2048);
+  return m;
+}
+
+const EnvironmentMap& sky_8k_map() {
+  static const EnvironmentMap m = make_sky(8192, 4096);
+  return m;
+}
+
 const ImportanceTable& sunset_table() {
   static const ImportanceTable t(sunset_map());
   return t;

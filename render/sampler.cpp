@@ -24,6 +24,24 @@ const std::uint32_t* matrix(int dim) {
   return &columns[static_cast<std::size_t>(dim) * 32];
 }
 
+const std::uint32_t* nibble_tables(int dim) {
+  static const std::vector<std::uint32_t> tables = [] {
+    std::vector<std::uint32_t> t(static_cast<std::size_t>(kDimensions) * 128);
+    for (int d = 0; d < kDimensions; ++d) {
+      const std::uint32_t* v = matrix(d);
+      for (int g = 0; g < 8; ++g)
+        for (std::uint32_t j = 0; j < 16; ++j) {
+          std::uint32_t x = 0;
+          for (int b = 0; b < 4; ++b)
+            if (j & (1u << b)) x ^= v[4 * g + b];
+          t[static_cast<std::size_t>(d) * 128 + 16 * g + j] = x;
+        }
+    }
+    return t;
+  }();
+  return &tables[static_cast<std::size_t>(dim) * 128];
+}
+
 }  // namespace sobol
 
 SamplerKind parse_sampler(const std::string& s) {

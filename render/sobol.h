@@ -21,11 +21,17 @@ constexpr int kDimensions = 64;
 /// index contributes column k.
 const std::uint32_t* matrix(int dim);
 
+/// Per dimension, 8 tables of 16 entries: entry j of table g is the XOR of the columns 4g .. 4g + 3
+/// selected by the bits of j. The renderer's indices are shuffled (full 32-bit words), so a bit-by-bit
+/// loop costs 32 steps and about 16 mispredicted branches per dimension; this is 8 loads and XORs.
+/// 32 KB in all, of which a direct-lighting sample touches a handful of dimensions (512 bytes each).
+const std::uint32_t* nibble_tables(int dim);
+
+/// Point `index` of dimension `dim` < kDimensions: the XOR of the columns selected by the index's bits.
 inline std::uint32_t sample_dim(std::uint32_t index, int dim) {
-  const std::uint32_t* v = matrix(dim);
+  const std::uint32_t* t = nibble_tables(dim);
   std::uint32_t result = 0;
-  for (int k = 0; index != 0; index >>= 1, ++k)
-    if (index & 1u) result ^= v[k];
+  for (int g = 0; g < 8; ++g, index >>= 4) result ^= t[16 * g + (index & 15u)];
   return result;
 }
 

@@ -8,12 +8,10 @@
 #include <vector>
 
 #include "envpis/equal_area.h"
+#include "envpis_assert.h"
 #include "parallel.h"
 #include "texel_filter.h"
 #include "texel_peak.h"
-
-#define ENVPIS_KERNEL_NS scalar
-#include "simd_ops.h"
 
 namespace envpis::detail {
 
@@ -34,26 +32,22 @@ struct Setup {
       : map(m), fine(f), w(m.width()), h(m.height()), N(f.resolution()), latlong(m.layout() != MapLayout::EqualArea),
         total(static_cast<std::size_t>(N) * N), table_texel_sr(4.0 * kPi / double(total)),
         ea_src_sr(4.0 * kPi / (double(w) * h)), lum(static_cast<std::size_t>(w) * h) {
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const Rgb L = map.texel(x, y);
-        lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
-      }
+    parallel_for(0, h, [&](int begin, int end) {
+      for (int y = begin; y < end; ++y)
+        for (int x = 0; x < w; ++x) {
+          const Rgb L = map.texel(x, y);
+          lum[static_cast<std::size_t>(y) * w + x] = static_cast<float>((double(L.r) + L.g + L.b) / 3.0);
+        }
+    });
   }
   float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
-  // Bilinear look-up of the channel average for a world direction, as EnvironmentMap::eval does it,
-  // with a fast polynomial atan2 for the lat-long angles.
+  // Bilinear look-up of the channel average for a world direction, through the same mapping as
+  // EnvironmentMap::eval.
   float lookup(Vec3 world) const {
     const Vec3 md = map.to_map(world);
     const auto at = [this](int x, int y) { return lum_at(x, y); };
-    if (!latlong) {
-      const Point2 p = equal_area_sphere_to_square(md);
-      return bilinear_equal_area(at, w, p.x, p.y);
-    }
-    float phi = scalar::simd::atan2_fast(md.y, md.x);
-    if (phi < 0) phi += 2 * kPi;
-    const float theta = scalar::simd::atan2_fast(std::sqrt(md.x * md.x + md.y * md.y), md.z);
-    return bilinear_latlong(at, w, h, phi * (0.5f * kInvPi), theta * kInvPi);
+    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
+    return latlong ? bilinear_latlong(at, w, h, p.x, p.y) : bilinear_equal_area(at, w, p.x, p.y);
   }
 };
 
@@ -120,8 +114,30 @@ struct SplatRow {
   std::vector<float> u, v, e;
 };
 
+// Azimuth cosines and sines of the sub-texel columns (x + (i + 0.5) / kx) / w of a lat-long map split
+// kx ways, entry x * kx + i: latlong_to_direction's own values (its point at theta = pi / 2, where
+// sin theta is exactly 1), so a point s * cos, s * sin, c is the one it returns, bit for bit, with
+// the row's sin and cos computed once instead of per point.
+struct SplitColumns {
+  std::vector<float> cos_phi, sin_phi;
+};
+
+SplitColumns split_columns(int w, int kx) {
+  SplitColumns c;
+  c.cos_phi.resize(static_cast<std::size_t>(w) * kx);
+  c.sin_phi.resize(c.cos_phi.size());
+  for (int x = 0; x < w; ++x)
+    for (int i = 0; i < kx; ++i) {
+      const Vec3 d = latlong_to_direction({float((x + (i + 0.5) / kx) / w), 0.5f});
+      c.cos_phi[static_cast<std::size_t>(x) * kx + i] = d.x;
+      c.sin_phi[static_cast<std::size_t>(x) * kx + i] = d.y;
+    }
+  return c;
+}
+
 void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const std::vector<float>& col_sin,
-               SplatRow& out, std::vector<float>& mx, std::vector<float>& my, std::vector<float>& mz) {
+               const std::vector<SplitColumns>& split, SplatRow& out, std::vector<float>& mx,
+               std::vector<float>& my, std::vector<float>& mz) {
   int kx, ky;
   splat_splits(su, y, kx, ky);
   const int w = su.w, h = su.h;
@@ -134,12 +150,16 @@ void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const 
                                      : su.ea_src_sr / (double(kx) * ky);
     const float st = static_cast<float>(std::sin(kPi * 0.5 * (v0 + v1)));
     const float ct = static_cast<float>(std::cos(kPi * 0.5 * (v0 + v1)));
+    const Vec3 row = su.latlong ? latlong_to_direction({0.0f, float(0.5 * (v0 + v1))}) : Vec3{};  // {sin, 0, cos}
     for (int x = 0; x < w; ++x) {
       const float e = static_cast<float>(double(su.lum_at(x, y)) * sub_sr);
       for (int i = 0; i < kx; ++i, ++k) {
         Vec3 md;
         if (su.latlong && kx == 1) {
           md = {st * col_cos[x], st * col_sin[x], ct};
+        } else if (su.latlong) {  // latlong_to_direction(uv) of the point below
+          const std::size_t c = static_cast<std::size_t>(x) * kx + i;
+          md = {row.x * split[kx].cos_phi[c], row.x * split[kx].sin_phi[c], row.z};
         } else {
           const Point2 uv{float((x + (i + 0.5) / kx) / w), float(0.5 * (v0 + v1))};
           md = su.latlong ? latlong_to_direction(uv) : equal_area_square_to_sphere(uv);
@@ -195,13 +215,20 @@ std::vector<double> splat(const Setup& su) {
     col_cos[x] = static_cast<float>(std::cos(phi));
     col_sin[x] = static_cast<float>(std::sin(phi));
   }
+  // The split columns of every kx that a row uses (lat-long only).
+  std::vector<SplitColumns> split(17);
+  for (int y = 0; y < su.h && su.latlong; ++y) {
+    int kx, ky;
+    splat_splits(su, y, kx, ky);
+    if (kx > 1 && split[kx].cos_phi.empty()) split[kx] = split_columns(su.w, kx);
+  }
   const int chunk = std::max(1, std::min(su.h, (1 << 18) / su.w));
   std::vector<SplatRow> rows(chunk);
   for (int y0 = 0; y0 < su.h; y0 += chunk) {
     const int y1 = std::min(su.h, y0 + chunk);
     parallel_for(y0, y1, [&](int row_begin, int row_end) {
       std::vector<float> mx, my, mz;
-      for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, rows[y - y0], mx, my, mz);
+      for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, split, rows[y - y0], mx, my, mz);
     });
     for (int y = y0; y < y1; ++y) splat_accumulate(su, rows[y - y0], out);
   }
@@ -252,22 +279,19 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   const std::vector<double> splatted = splat(su);
   // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
   // (so a texel that sees light by either route keeps a positive density).
+  // Every texel is written (FineLevel sized and zeroed the array): no second fill.
   std::vector<float>& func = fine.values();
-  func.assign(su.total, 0.0f);
-  for (std::size_t i = 0; i < su.total; ++i) {
-    const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
-    const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
-    func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
-  }
+  ENVPIS_ASSERT(func.size() == su.total);
+  parallel_for(0, su.N, [&](int row_begin, int row_end) {
+    for (std::size_t i = std::size_t(row_begin) * su.N; i < std::size_t(row_end) * su.N; ++i) {
+      const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
+      const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
+      func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
+    }
+  });
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
   if (options.peak_ratio > 0) {
-    const std::vector<float> peaks = texel_peaks(map, su.lum, su.N);
-    const float inv_k = 1.0f / options.peak_ratio;
-    for (int y = 0; y < su.N; ++y)
-      for (int x = 0; x < su.N; ++x) {
-        float& v = func[fine.index(x, y)];
-        v = std::max(v, peaks[static_cast<std::size_t>(y) * su.N + x] * inv_k);
-      }
+    raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
   }
   double sum = 0;
   for (float v : func) sum += v;

@@ -14,42 +14,54 @@ namespace envpis::detail {
 
 namespace {
 
-// Range maximum over the columns of each row: one bottom-up max tree per row (leaves padded to a power
-// of two), so a query over any column range costs O(log width).
-class RowMaxTree {
+// Range maximum over the columns of each row. Nearly every footprint spans a few columns and is
+// scanned directly in the map's row; a wide one (near a lat-long map's poles) reads maxima of aligned
+// blocks of kBlock columns, and a whole row its precomputed maximum. The maximum of floats is exact in
+// any order, so the result is the same as any other range-maximum structure's; this one adds w / kBlock
+// floats per row instead of a max tree's 2w (64 MB for a 4096 x 2048 map), and reads contiguous memory.
+class RowMax {
  public:
-  RowMaxTree(const std::vector<float>& lum, int w, int h) : w_(w), leaves_(1) {
-    while (leaves_ < w) leaves_ *= 2;
-    tree_.assign(static_cast<std::size_t>(h) * 2 * leaves_, 0.0f);
-    for (int y = 0; y < h; ++y) {
-      float* t = row(y);
-      std::copy_n(&lum[static_cast<std::size_t>(y) * w], w, t + leaves_);
-      for (int i = leaves_ - 1; i >= 1; --i) t[i] = std::max(t[2 * i], t[2 * i + 1]);
-    }
+  RowMax(const std::vector<float>& lum, int w, int h)
+      : lum_(lum.data()), w_(w), blocks_((w + kBlock - 1) / kBlock),
+        block_(static_cast<std::size_t>(h) * blocks_), row_(h) {
+    detail::parallel_for(0, h, [&](int begin, int end) {
+      for (int y = begin; y < end; ++y) {
+        const float* r = lum_ + static_cast<std::size_t>(y) * w_;
+        float* b = &block_[static_cast<std::size_t>(y) * blocks_];
+        for (int k = 0; k < blocks_; ++k) b[k] = scan(r, k * kBlock, std::min(w_, (k + 1) * kBlock) - 1);
+        row_[y] = scan(b, 0, blocks_ - 1);
+      }
+    });
   }
   /// Max over columns [a, b] of row y, 0 <= a <= b < width.
   float query(int y, int a, int b) const {
-    const float* t = row(y);
-    float m = 0;
-    for (a += leaves_, b += leaves_ + 1; a < b; a >>= 1, b >>= 1) {
-      if (a & 1) m = std::max(m, t[a++]);
-      if (b & 1) m = std::max(m, t[--b]);
-    }
-    return m;
+    if (a == 0 && b == w_ - 1) return row_[y];
+    const float* r = lum_ + static_cast<std::size_t>(y) * w_;
+    if (b - a < 2 * kBlock) return scan(r, a, b);
+    const int ka = (a + kBlock - 1) / kBlock, kb = (b + 1) / kBlock;  // whole blocks [ka, kb)
+    float m = std::max(scan(r, a, ka * kBlock - 1), scan(r, kb * kBlock, b));
+    return std::max(m, scan(&block_[static_cast<std::size_t>(y) * blocks_], ka, kb - 1));
   }
   /// Max over columns [a, b] taken modulo the width (a range that crosses the seam wraps around).
   float query_wrapped(int y, int a, int b) const {
-    if (b - a + 1 >= w_) return query(y, 0, w_ - 1);
+    if (b - a + 1 >= w_) return row_[y];
+    if (a >= 0 && b < w_) return query(y, a, b);  // nearly always: no integer division
     a = ((a % w_) + w_) % w_;
     b = ((b % w_) + w_) % w_;
     return a <= b ? query(y, a, b) : std::max(query(y, a, w_ - 1), query(y, 0, b));
   }
 
  private:
-  float* row(int y) { return &tree_[static_cast<std::size_t>(y) * 2 * leaves_]; }
-  const float* row(int y) const { return &tree_[static_cast<std::size_t>(y) * 2 * leaves_]; }
-  int w_, leaves_;
-  std::vector<float> tree_;
+  static constexpr int kBlock = 32;
+  // Max of p[a..b]; 0 for an empty range (every value is >= 0).
+  static float scan(const float* p, int a, int b) {
+    float m = 0;
+    for (int i = a; i <= b; ++i) m = std::max(m, p[i]);
+    return m;
+  }
+  const float* lum_;
+  int w_, blocks_;
+  std::vector<float> block_, row_;
 };
 
 // The outline of a texel: its corners and edge midpoints, going round.
@@ -75,42 +87,44 @@ bool winds_around_pole(const float* us) {
   float turns = 0;
   for (int k = 0; k < kOutline; ++k) {
     float d = us[(k + 1) % kOutline] - us[k];
-    d -= std::round(d);
+    // d - round(d) for d in (-1, 1), without the library call (round takes halves away from zero).
+    d -= d >= 0.5f ? 1.0f : (d <= -0.5f ? -1.0f : 0.0f);
     if (std::fabs(d) > 0.4f) return true;
     turns += d;
   }
   return std::fabs(turns) > 0.5f;
 }
 
-// Map coordinates (u, v) and map-space z of points along one horizontal line of the table.
+// Map coordinates (u, v) and map-space z of points along one horizontal line of the table, with the
+// square's coordinates and directions as scratch (kept between lines: no allocation per line).
 struct Line {
-  std::vector<float> u, v, z;
+  std::vector<float> u, v, z, su, sv, dx, dy, dz;
 };
 
 // `count` points (i * step, y) of the equal-area square, i = 0 .. count - 1, in the map's coordinates.
 void map_line(const EnvironmentMap& map, bool latlong, float y, int count, float step, Line& out) {
-  std::vector<float> su(count), sv(count, y), dx(count), dy(count), dz(count);
-  for (int i = 0; i < count; ++i) su[i] = std::min(1.0f, float(i) * step);
-  equal_area_square_to_sphere(static_cast<std::size_t>(count), su.data(), sv.data(), dx.data(), dy.data(), dz.data());
-  out.u.resize(count), out.v.resize(count), out.z.resize(count);
+  for (auto* a : {&out.u, &out.v, &out.z, &out.su, &out.sv, &out.dx, &out.dy, &out.dz}) a->resize(count);
+  for (int i = 0; i < count; ++i) out.su[i] = std::min(1.0f, float(i) * step), out.sv[i] = y;
+  equal_area_square_to_sphere(static_cast<std::size_t>(count), out.su.data(), out.sv.data(), out.dx.data(),
+                              out.dy.data(), out.dz.data());
   for (int i = 0; i < count; ++i) {
-    const Vec3 md = map.to_map({dx[i], dy[i], dz[i]});
+    const Vec3 md = map.to_map({out.dx[i], out.dy[i], out.dz[i]});
     const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
     out.u[i] = p.x, out.v[i] = p.y, out.z[i] = md.z;
   }
 }
 
-}  // namespace
-
-std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
+// Calls visit(x, y, peak) once for every texel of the N x N grid, rows in parallel (each row from one
+// thread; rows in any order).
+template <class Visit>
+void for_each_peak(const EnvironmentMap& map, const std::vector<float>& lum, int N, const Visit& visit) {
   const int w = map.width(), h = map.height();
   const bool latlong = map.layout() != MapLayout::EqualArea;
   const bool nearest = map.filter() == MapFilter::Nearest;
-  const RowMaxTree tree(lum, w, h);
+  const RowMax rows(lum, w, h);
   const float map_max = *std::max_element(lum.begin(), lum.end());
   // An outline point this close to a lat-long pole (a thousandth of a texel side) has no usable azimuth.
   const float pole_z = std::cos(1e-3f * std::sqrt(4.0f * kPi) / float(N));
-  std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
   const float inv_n = 1.0f / float(N);
 
   detail::parallel_for(0, N, [&](int row_begin, int row_end) {
@@ -159,7 +173,7 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
           r0 = std::max(r0, 0);
           r1 = std::min(r1, h - 1);
           peak = 0;
-          for (int r = r0; r <= r1; ++r) peak = std::max(peak, tree.query_wrapped(r, c0, c1));
+          for (int r = r0; r <= r1; ++r) peak = std::max(peak, rows.query_wrapped(r, c0, c1));
         } else if (umax - umin > 0.5f || vmax - vmin > 0.5f) {
           peak = map_max;  // the outline crosses the map square's folded edge (rotated maps only)
         } else {
@@ -177,12 +191,27 @@ std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<floa
               peak = std::max(peak, lum[static_cast<std::size_t>(yi) * w + xi]);
             }
         }
-        peaks[static_cast<std::size_t>(y) * N + x] = peak;
+        visit(x, y, peak);
       }
       std::swap(top, bottom);
     }
   });
+}
+
+}  // namespace
+
+std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
+  std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
+  for_each_peak(map, lum, N, [&](int x, int y, float peak) { peaks[static_cast<std::size_t>(y) * N + x] = peak; });
   return peaks;
+}
+
+void raise_to_peaks(const EnvironmentMap& map, const std::vector<float>& lum, float inv_k, FineLevel& fine) {
+  std::vector<float>& func = fine.values();
+  for_each_peak(map, lum, fine.resolution(), [&](int x, int y, float peak) {
+    float& v = func[fine.index(x, y)];
+    v = std::max(v, peak * inv_k);
+  });
 }
 
 }  // namespace envpis::detail

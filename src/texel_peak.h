@@ -10,18 +10,24 @@
 // How: a texel's outline (corners and edge midpoints) is mapped into the map's pixel coordinates; the
 // bounding box of those points, widened by a margin for the outline's curvature and by the bilinear
 // footprint, contains every map texel that can contribute inside the texel. The peak is the largest of
-// those texels, found with a per-row max tree. Texels near a lat-long map's poles take the whole
-// azimuth range; lat-long seams are unwrapped.
+// those texels (a direct scan of the map's rows; block maxima for wide ranges). Texels near a lat-long
+// map's poles take the whole azimuth range; lat-long seams are unwrapped. Rows of the grid run in
+// parallel, each mapping its outline points once.
 #pragma once
 
 #include <vector>
 
 #include "envpis/environment_map.h"
+#include "fine_level.h"
 
 namespace envpis::detail {
 
 /// `lum` holds the map's per-texel importance (channel average), row-major, width * height.
 /// Returns N * N peaks, row-major over the equal-area square (y down).
 std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N);
+
+/// The bound applied in the same pass, without the N * N array of peaks: every texel of `fine` is
+/// raised to at least its peak times inv_k (the same values as max(v, texel_peaks(...)[i] * inv_k)).
+void raise_to_peaks(const EnvironmentMap& map, const std::vector<float>& lum, float inv_k, FineLevel& fine);
 
 }  // namespace envpis::detail

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "test_util.h"
 
@@ -352,6 +353,58 @@ TEST(EnvironmentMap, LatLongBilinearFilteringAndMapSpace) {
   const auto r = synthetic_latlong(w, h, [](int x, int y) { return float(x + 100 * y); }, o);
   const Vec3 d = m.to_world(latlong_to_direction({4.5f / w, 3.5f / h}));
   EXPECT_NEAR(r.eval(o.rotation * d).r, 2 * m.eval(d).r, 1e-2f);
+}
+
+// direction_to_latlong uses polynomial angles (src/environment_map.cpp). Against the exact angles (in
+// double) over the sphere, near the poles and across the seam: the errors stay within the documented
+// bounds, a 4096 x 2048 map's nearest look-up picks the exact texel except within a band of 1e-3 of a
+// texel at its edges, and bilinear values move by no more than that band allows.
+TEST(EnvironmentMap, LatLongLookUpIsAccurate) {
+  std::mt19937 rng(11);
+  std::normal_distribution<float> g;
+  std::uniform_real_distribution<float> tiny(-1e-6f, 1e-6f);
+  std::vector<Vec3> dirs;
+  for (int i = 0; i < 400000; ++i) dirs.push_back({g(rng), g(rng), g(rng)});
+  for (int i = 0; i < 20000; ++i) {
+    dirs.push_back({tiny(rng), tiny(rng), 1.0f});                     // at the poles
+    dirs.push_back({tiny(rng), tiny(rng), -1.0f});
+    dirs.push_back({g(rng), tiny(rng) * std::fabs(g(rng)), g(rng)});  // at the seam (phi = 0) and phi = pi
+    dirs.push_back({1.0f, 1.0f + tiny(rng), g(rng)});                   // where atan2's branches meet
+  }
+  const int w = 4096, h = 2048;
+  const double band = 1e-3;
+  double max_phi = 0, max_theta = 0;
+  int outside_band = 0, differ = 0;
+  const auto m = synthetic_latlong(64, 32, [](int x, int y) { return float((x * 37 + y * 91) % 17) / 16; });
+  float max_bilinear = 0;
+  for (const Vec3& d : dirs) {
+    const Point2 p = direction_to_latlong(d);
+    double phi = std::atan2(double(d.y), double(d.x));
+    if (phi < 0) phi += 2 * M_PI;
+    const double theta = std::atan2(std::hypot(double(d.x), double(d.y)), double(d.z));
+    double dphi = std::fabs(2 * M_PI * p.x - phi);
+    dphi = std::min(dphi, 2 * M_PI - dphi);  // across the seam
+    max_phi = std::max(max_phi, dphi);
+    max_theta = std::max(max_theta, std::fabs(M_PI * p.y - theta));
+    // Nearest texel: the exact one, unless the exact coordinate is within the band of an edge.
+    const double eu = std::fmod(phi / (2 * M_PI), 1.0) * w, ev = theta / M_PI * h;
+    const int ex = int(eu) % w, ey = std::min(int(ev), h - 1);
+    const int fx = int(p.x * w) % w, fy = std::min(int(p.y * h), h - 1);
+    if (ex != fx || ey != fy) {
+      ++differ;
+      const double du = std::fabs(eu - std::round(eu)), dv = std::fabs(ev - std::round(ev));
+      outside_band += (ex != fx && du > band) || (ey != fy && dv > band);
+    }
+    const Point2 exact{float(eu / w), float(ev / h)};
+    max_bilinear = std::max(max_bilinear, std::fabs(m.eval(m.to_world(d)).r - m.eval_texture(exact).r));
+  }
+  EXPECT_LT(max_phi, 6.5e-7) << "the bound in direction_to_latlong's comment";
+  EXPECT_LT(max_theta, 3.5e-7);
+  EXPECT_EQ(outside_band, 0) << differ << " directions chose another texel";
+  EXPECT_LT(differ, int(dirs.size() / 100));  // all within the band, most of them at the seam and poles
+  // A 64 x 32 map whose neighbours differ by up to 1: an angle error of 6.5e-7 rad moves a bilinear
+  // look-up by at most 64 / (2 pi) * 6.5e-7 + 32 / pi * 3.5e-7 of that, about 1e-5 (with float rounding).
+  EXPECT_LT(max_bilinear, 2e-5f);
 }
 
 TEST(EnvironmentMap, LatLongOrientation) {

@@ -39,6 +39,23 @@ TEST(Sobol, MatricesReproduceBoostsSequence) {
   for (std::uint32_t i = 0; i < 1000; ++i) EXPECT_EQ(sobol::sample_dim(i, 0), sobol::reverse_bits(i));
 }
 
+TEST(Sobol, TablesMatchTheColumnsForFullWordIndices) {
+  // The shuffled indices the renderer uses have all 32 bits set at random; sample_dim reads them four
+  // bits at a time from tables, which must equal the XOR of the generator matrix's columns.
+  std::uint64_t state = 0x9e3779b97f4a7c15ULL;
+  for (int n = 0; n < 20000; ++n) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    const std::uint32_t i = static_cast<std::uint32_t>(state >> 32);
+    const int d = n % sobol::kDimensions;
+    const std::uint32_t* v = sobol::matrix(d);
+    std::uint32_t expect = 0;
+    for (int k = 0; k < 32; ++k)
+      if (i & (1u << k)) expect ^= v[k];
+    ASSERT_EQ(sobol::sample_dim(i, d), expect) << "index " << i << ", dimension " << d;
+  }
+  EXPECT_EQ(sobol::sample_dim(0xffffffffu, 0), 0xffffffffu);  // van der Corput of all ones
+}
+
 TEST(Sobol, ScrambleAndShuffleAreBijectionsThatKeepBlocks) {
   // The shuffle maps each aligned block of 2^m indices onto one aligned block (the property that keeps
   // prefixes stratified); the scramble is a bijection.
