@@ -1,0 +1,73 @@
+#!/usr/bin/python3
+"""Issue 21's sphere measurement for two envpis builds: relMSE on the GGX alpha 0.25 sphere (all its
+pixels and the brightest quartile by reference brightness), nearest look-ups, direct light, medians over
+seeds 1-3 at 16 / 64 / 256 spp, on sunrise's sun alone (its 53 brightest texels on black, written as a
+PFM) and on all of sunrise. Both builds are measured against one reference (mis, 4096 spp, the second
+build): the table change does not move the converged image. docs/cycles.md has the results.
+
+  /usr/bin/python3 scripts/sun_sphere.py OLD_ENVPIS NEW_ENVPIS [OUT_DIR]   (SIZE=128 REF=4096 STRATS=env,mis)
+"""
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cycles_compare as cc  # noqa: E402  (its EXR reader, scene and relMSE)
+
+SUNRISE = "/usr/share/blender/datafiles/studiolights/world/sunrise.exr"
+
+
+def write_sun_only(path):
+    img, _ = cc.read_exr(SUNRISE)
+    idx = np.argsort(img.mean(axis=2).ravel())[::-1][:53]
+    out = np.zeros_like(img, dtype=np.float32)
+    out.reshape(-1, 3)[idx] = img.reshape(-1, 3)[idx]
+    h, w, _ = out.shape
+    with open(path, "wb") as f:  # PFM: little-endian (negative scale), rows bottom to top
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        f.write(np.ascontiguousarray(out[::-1]).astype("<f4").tobytes())
+
+
+class Args:
+    reuse, sampler, threads = True, "sobol", 2
+
+
+def main(argv):
+    builds = {"old": argv[1], "new": argv[2]}
+    out_dir = argv[3] if len(argv) > 3 else "out/sun-sphere"
+    os.makedirs(out_dir, exist_ok=True)
+    size = int(os.environ.get("SIZE", 128))
+    sun = os.path.join(out_dir, "sun.pfm")
+    if not os.path.exists(sun):
+        write_sun_only(sun)
+    scene = os.path.join(out_dir, "scene.json")
+    cc.scene_json(scene, size, 0.25)
+    mask = cc.sphere_mask(size)
+
+    def render(exe, env, strat, spp, seed, name):
+        a = Args()
+        a.envpis = exe
+        out = os.path.join(out_dir, name + ".exr")
+        cc.envpis_render(a, scene, env, strat, spp, seed, out)
+        return cc.read_exr(out)[0]
+
+    for env_name, env in (("sun", sun), ("sunrise", SUNRISE)):
+        ref = render(builds["new"], env, "mis", int(os.environ.get("REF", 4096)), 99, env_name + "-ref")
+        lum = ref.mean(axis=2)
+        top = mask & (lum >= np.percentile(lum[mask], 75))
+        for strat in os.environ.get("STRATS", "env,mis").split(","):
+            for b, exe in builds.items():
+                row = []
+                for spp in (16, 64, 256):
+                    errs = [cc.rel_sq_error(render(exe, env, strat, spp, s, "%s-%s-%s-%d-%d" % (env_name, strat, b, spp, s)), ref)
+                            for s in (1, 2, 3)]
+                    row.append((np.median([e[mask].mean() for e in errs]), np.median([e[top].mean() for e in errs])))
+                slope = np.polyfit(np.log([16, 64, 256]), np.log([r[0] for r in row]), 1)[0]
+                print("%s %s %s relMSE 16/64/256: %s slope %.2f | brightest quartile: %s" % (
+                    env_name, strat, b, " / ".join("%.3g" % r[0] for r in row), slope,
+                    " / ".join("%.3g" % r[1] for r in row)), flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
