@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Issue 21's sphere measurement for two envpis builds: relMSE on the GGX alpha 0.25 sphere (all its
 pixels and the brightest quartile by reference brightness), nearest look-ups, direct light, medians over
 seeds 1-3 at 16 / 64 / 256 spp, on sunrise's sun alone (its 53 brightest texels on black, written as a

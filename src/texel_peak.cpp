@@ -67,42 +67,6 @@ class RowMax {
 // The outline of a texel: its corners and edge midpoints, going round.
 constexpr int kOutline = 8;
 
-// Texel range [lo, hi] that eval can read at pixel coordinates [a, b] (texel centres at integers): a
-// bilinear look-up reads the texels either side, a nearest one the closest. The margin covers the
-// outline's curvature between its sample points. Bilinear: a fixed fraction of the extent. Nearest:
-// `sag`, how far the outline's edge midpoints lie off the chords of their corners (pixels), measured
-// per texel. Between two sample points half an edge apart the curve strays a quarter of that (a
-// sagitta scales with the square of the chord); half of it plus 0.01 pixel of round-off is kept. A
-// fixed 0.05 + 0.25 (b - a) let every nearest texel reach its neighbours: around a sun of 53 texels,
-// equal-area texels aligned with an equal-area map's then drew 77% of the light samples onto black
-// (docs/cycles.md, "Why Cycles converged faster in the highlight").
-void footprint(float a, float b, bool nearest, float sag, int& lo, int& hi) {
-  if (nearest) {
-    const float margin = 0.01f + 0.5f * sag;
-    lo = static_cast<int>(std::floor(a - margin + 0.5f));
-    hi = static_cast<int>(std::floor(b + margin + 0.5f));
-  } else {
-    const float margin = 0.05f + 0.25f * (b - a);
-    lo = static_cast<int>(std::floor(a - margin));
-    hi = static_cast<int>(std::floor(b + margin)) + 1;
-  }
-}
-
-// The outline's largest sagitta along u and along v, in pixels: for each of the 4 edges (corners at
-// even k, the midpoint between them at odd k), the midpoint's distance from the corners' mean. Azimuth
-// differences are taken across the seam.
-std::pair<float, float> outline_sag(const float* us, const float* vs, int w, int h) {
-  float su = 0, sv = 0;
-  for (int e = 0; e < 4; ++e) {
-    const int c0 = 2 * e, m = 2 * e + 1, c1 = (2 * e + 2) % 8;
-    float d0 = us[c0] - us[m], d1 = us[c1] - us[m];
-    d0 -= std::round(d0), d1 -= std::round(d1);
-    su = std::max(su, std::fabs(0.5f * (d0 + d1)) * float(w));
-    sv = std::max(sv, std::fabs(0.5f * (vs[c0] + vs[c1]) - vs[m]) * float(h));
-  }
-  return {su, sv};
-}
-
 // Whether the outline's azimuths (in turns, [0, 1)) wind once around a pole: the texel contains it.
 // A step of nearly half a turn means the pole lies on the outline, between two of its points.
 bool winds_around_pole(const float* us) {
@@ -223,6 +187,31 @@ void for_each_peak(const EnvironmentMap& map, const std::vector<float>& lum, int
 }
 
 }  // namespace
+
+void footprint(float a, float b, bool nearest, float sag, int& lo, int& hi) {
+  if (nearest) {
+    const float margin = 0.01f + 0.5f * sag;
+    lo = static_cast<int>(std::floor(a - margin + 0.5f));
+    hi = static_cast<int>(std::floor(b + margin + 0.5f));
+  } else {
+    const float margin = 0.05f + 0.25f * (b - a);
+    lo = static_cast<int>(std::floor(a - margin));
+    hi = static_cast<int>(std::floor(b + margin)) + 1;
+  }
+}
+
+std::pair<float, float> outline_sag(const float* us, const float* vs, int w, int h) {
+  float su = 0, sv = 0;
+  for (int e = 0; e < 4; ++e) {
+    const int c0 = 2 * e, m = 2 * e + 1, c1 = (2 * e + 2) % 8;
+    float d0 = us[c0] - us[m], d1 = us[c1] - us[m];
+    d0 -= std::round(d0), d1 -= std::round(d1);
+    su = std::max(su, std::fabs(0.5f * (d0 + d1)) * float(w));
+    sv = std::max(sv, std::fabs(0.5f * (vs[c0] + vs[c1]) - vs[m]) * float(h));
+  }
+  return {su, sv};
+}
+
 
 std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
   std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);

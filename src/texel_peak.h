@@ -15,12 +15,29 @@
 // parallel, each mapping its outline points once.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "envpis/environment_map.h"
 #include "fine_level.h"
 
 namespace envpis::detail {
+
+// A texel's outline is 8 points going round: corners at even k, edge midpoints at odd k.
+
+/// Texel range [lo, hi] that eval can read at pixel coordinates [a, b] (texel centres at integers): a
+/// bilinear look-up reads the texels either side, a nearest one the closest. The margin covers the
+/// outline's curvature between its sample points. Bilinear: a fixed fraction of the extent. Nearest:
+/// `sag`, how far the outline's edge midpoints lie off the chords of their corners (pixels), measured
+/// per texel. Between two sample points half an edge apart the curve strays a quarter of that (a
+/// sagitta scales with the square of the chord); half of it plus 0.01 pixel of round-off is kept. A
+/// fixed 0.05 + 0.25 (b - a) let every nearest texel reach its neighbours, which drew light samples
+/// onto the black beside a small sun (docs/cycles.md, "Why Cycles converged faster in the highlight").
+void footprint(float a, float b, bool nearest, float sag, int& lo, int& hi);
+
+/// The outline's largest sagitta along u and along v, in pixels: for each of the 4 edges, the
+/// midpoint's distance from the corners' mean. Azimuth differences (turns) are taken across the seam.
+std::pair<float, float> outline_sag(const float* us, const float* vs, int w, int h);
 
 /// `lum` holds the map's per-texel importance (channel average), row-major, width * height.
 /// Returns N * N peaks, row-major over the equal-area square (y down).

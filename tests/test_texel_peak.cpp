@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The table's peak bound (src/texel_peak.cpp) against the algorithm it replaced
 // (tests/texel_peak_reference.h): bit-identical peaks, and bit-identical table values, on maps made to
 // break it: tiny suns at the seam, the poles and cell corners, single-texel spikes, nearest and bilinear

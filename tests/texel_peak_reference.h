@@ -1,7 +1,9 @@
+// SPDX-License-Identifier: Apache-2.0
 // The table's peak bound as it was computed before 2026-12-02 (src/texel_peak.cpp at 1d3bd5d: a max tree
-// per map row, a separate array of peaks), kept verbatim as the reference that the faster build must
+// per map row, a separate array of peaks), kept as the reference that the faster build must
 // reproduce bit for bit (tests/test_texel_peak.cpp). Only the namespace and the row loop (one row per
-// TBB task instead of the library's parallel_for) differ.
+// TBB task instead of the library's parallel_for) differ, and the footprint of a texel (the margin
+// rule) is the library's own, so that the reference follows a change of the bound itself.
 #pragma once
 
 #include <tbb/parallel_for.h>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "envpis/envpis.h"
+#include "texel_peak.h"
 
 namespace envpis::test::old_peak {
 
@@ -57,20 +60,6 @@ class RowMaxTree {
 
 // The outline of a texel: its corners and edge midpoints, going round.
 constexpr int kOutline = 8;
-
-// Texel range [lo, hi] that eval can read at pixel coordinates [a, b] (texel centres at integers): a
-// bilinear look-up reads the texels either side, a nearest one the closest. The margin covers the
-// outline's curvature between its sample points.
-void footprint(float a, float b, bool nearest, int& lo, int& hi) {
-  const float margin = 0.05f + 0.25f * (b - a);
-  if (nearest) {
-    lo = static_cast<int>(std::floor(a - margin + 0.5f));
-    hi = static_cast<int>(std::floor(b + margin + 0.5f));
-  } else {
-    lo = static_cast<int>(std::floor(a - margin));
-    hi = static_cast<int>(std::floor(b + margin)) + 1;
-  }
-}
 
 // Whether the outline's azimuths (in turns, [0, 1)) wind once around a pole: the texel contains it.
 // A step of nearly half a turn means the pole lies on the outline, between two of its points.
@@ -132,13 +121,14 @@ inline std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vect
         const std::pair<const Line*, int> at[kOutline] = {{&top, 2 * x},        {&top, 2 * x + 1}, {&top, 2 * x + 2},
                                                           {&mid, x + 1},        {&bottom, 2 * x + 2},
                                                           {&bottom, 2 * x + 1}, {&bottom, 2 * x}, {&mid, x}};
-        float umin = 2, umax = -2, vmin = 2, vmax = -2, us[kOutline];
+        float umin = 2, umax = -2, vmin = 2, vmax = -2, us[kOutline], vs[kOutline];
         bool north = false, south = false;
         float zsum = 0;
         for (int k = 0; k < kOutline; ++k) {
           const Line& l = *at[k].first;
           const int i = at[k].second;
           us[k] = l.u[i];
+          vs[k] = l.v[i];
           vmin = std::min(vmin, l.v[i]);
           vmax = std::max(vmax, l.v[i]);
           zsum += l.z[i];
@@ -147,6 +137,7 @@ inline std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vect
         }
         for (float u : us) umin = std::min(umin, u), umax = std::max(umax, u);
         float peak;
+        const auto [sag_u, sag_v] = nearest ? envpis::detail::outline_sag(us, vs, w, h) : std::pair<float, float>{0, 0};
         if (latlong && !north && !south && winds_around_pole(us)) (zsum > 0 ? north : south) = true;
         if (latlong) {
           if (umax - umin > 0.5f) {  // the outline crosses the seam: unwrap
@@ -159,8 +150,8 @@ inline std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vect
           if (north) vmin = 0;
           if (south) vmax = 1;
           int c0, c1, r0, r1;
-          footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, c0, c1);
-          footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, r0, r1);
+          envpis::detail::footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, sag_u, c0, c1);
+          envpis::detail::footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, sag_v, r0, r1);
           if (north || south) c0 = 0, c1 = w - 1;
           r0 = std::max(r0, 0);
           r1 = std::min(r1, h - 1);
@@ -170,8 +161,8 @@ inline std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vect
           peak = map_max;  // the outline crosses the map square's folded edge (rotated maps only)
         } else {
           int c0, c1, r0, r1;
-          footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, c0, c1);
-          footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, r0, r1);
+          envpis::detail::footprint(umin * w - 0.5f, umax * w - 0.5f, nearest, sag_u, c0, c1);
+          envpis::detail::footprint(vmin * h - 0.5f, vmax * h - 0.5f, nearest, sag_v, r0, r1);
           peak = 0;
           for (int r = r0; r <= r1; ++r)
             for (int c = c0; c <= c1; ++c) {  // past the square's edge, the texels eval's look-up reads

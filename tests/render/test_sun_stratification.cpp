@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Stratification of light samples on a sun-only map (issue 21): a pixel's N Sobol samples through the
 // whole light-sampling path (the renderer's PixelSampler dimensions, the table's top cell, sub-cell,
 // fine texel and point in texel), counted against N times the probability of what they should hit.
