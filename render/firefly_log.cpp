@@ -100,9 +100,11 @@ void FireflyRecorder::add_table_view(const LightSampler& light, FireflyRecord& r
   const int T = table_->top_resolution(), F = table_->cell_resolution(), N = table_->fine_resolution();
   r.cell = table_->cell_of(p);
   const int cx = r.cell % T, cy = r.cell / T;
-  r.texel_x = std::clamp(static_cast<int>(p.x * float(N)), cx * F, cx * F + F - 1);
-  r.texel_y = std::clamp(static_cast<int>(p.y * float(N)), cy * F, cy * F + F - 1);
-  r.texel_importance = table_->importance(r.texel_x, r.texel_y);
+  if (table_->fine_texels() == FineTexels::EqualArea) {  // a Map table's texels are the map's: not logged
+    r.texel_x = std::clamp(static_cast<int>(p.x * float(N)), cx * F, cx * F + F - 1);
+    r.texel_y = std::clamp(static_cast<int>(p.y * float(N)), cy * F, cy * F + F - 1);
+    r.texel_importance = table_->importance(r.texel_x, r.texel_y);
+  }
   r.table_pdf = table_->pdf(r.direction);
   r.cell_env_probability = table_->cell_probability(r.cell);
   r.pdf_in_cell = table_->pdf_in_cell(r.cell, p);

@@ -79,6 +79,7 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
     case Strategy::Oracle:
       opt.top_resolution = oracle.resolution;
       opt.subdivision = 1;  // the oracle weighs its own finer cells; sub-cells would only cost cones
+      opt.fine_texels = FineTexels::EqualArea;  // it weighs the equal-area fine texels (render/oracle.h)
       t.table = std::make_shared<ImportanceTable>(env, opt);
       if (!t.table->empty()) t.oracle_cells = std::make_shared<OracleCells>(env, t.table);
       break;

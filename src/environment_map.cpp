@@ -151,29 +151,36 @@ Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
   return detail::bilinear_equal_area([this](int i, int j) { return texel(i, j); }, width_, x, y);
 }
 
-// The texel that texture point (x, y) falls in. Outside [0,1) a lat-long map wraps in u and clamps in v;
-// an equal-area map wraps across its edges as the sphere does (equal_area_wrap).
-Rgb EnvironmentMap::nearest(float x, float y) const {
-  const float fx = std::floor(x * width_), fy = std::floor(y * height_);
+TexelCoord latlong_texel(Point2 uv, int width, int height) {
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
+  const float fx = std::floor(uv.x * width), fy = std::floor(uv.y * height);
   // Far outside the image (only for absurd inputs) the float -> int conversion must not overflow.
-  int xi = static_cast<int>(std::clamp(fx, -2.0f * width_, 2.0f * width_));
-  int yi = static_cast<int>(std::clamp(fy, -2.0f * height_, 2.0f * height_));
-  if (layout_ == MapLayout::EqualArea) {
-    if (!equal_area_wrap(width_, xi, yi)) {
-      xi = std::clamp(xi, 0, width_ - 1);
-      yi = std::clamp(yi, 0, height_ - 1);
-    }
-    return texel(xi, yi);
-  }
+  int xi = static_cast<int>(std::clamp(fx, -2.0f * width, 2.0f * width));
+  const int yi = static_cast<int>(std::clamp(fy, -1.0f, float(height)));
   // xi is in [-2w, 2w]: at most two steps of wrapping, without an integer division per look-up.
-  while (xi >= width_) xi -= width_;
-  while (xi < 0) xi += width_;
-  return texel(xi, std::clamp(yi, 0, height_ - 1));
+  while (xi >= width) xi -= width;
+  while (xi < 0) xi += width;
+  return {xi, std::clamp(yi, 0, height - 1)};
+}
+
+TexelCoord EnvironmentMap::texel_coord(Point2 uv) const {
+  if (layout_ == MapLayout::LatLong) return latlong_texel(uv, width_, height_);
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
+  int xi = static_cast<int>(std::clamp(std::floor(uv.x * width_), -2.0f * width_, 2.0f * width_));
+  int yi = static_cast<int>(std::clamp(std::floor(uv.y * height_), -2.0f * height_, 2.0f * height_));
+  if (!equal_area_wrap(width_, xi, yi)) {  // wraps across the square's edges as the sphere does
+    xi = std::clamp(xi, 0, width_ - 1);
+    yi = std::clamp(yi, 0, height_ - 1);
+  }
+  return {xi, yi};
 }
 
 Rgb EnvironmentMap::eval_texture(Point2 uv) const {
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
-  if (filter_ == MapFilter::Nearest) return nearest(uv.x, uv.y);
+  if (filter_ == MapFilter::Nearest) {
+    const TexelCoord t = texel_coord(uv);
+    return texel(t.x, t.y);
+  }
   return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
 }
 

@@ -19,6 +19,21 @@
 
 namespace envpis::detail {
 
+// Sums over a leaf's texel centres d: importance-weighted (v d, v) and plain (d, n), each texel
+// counted by its solid angle (equal-area texels: 1 each).
+struct DirectionSums {
+  double v[3] = {0, 0, 0}, w = 0, d[3] = {0, 0, 0}, n = 0;
+  void add(const DirectionSums& o) {
+    for (int k = 0; k < 3; ++k) v[k] += o.v[k], d[k] += o.d[k];
+    w += o.w;
+    n += o.n;
+  }
+  void add(Vec3 dir, double importance, double measure) {
+    v[0] += importance * dir.x, v[1] += importance * dir.y, v[2] += importance * dir.z, w += importance;
+    d[0] += measure * dir.x, d[1] += measure * dir.y, d[2] += measure * dir.z, n += measure;
+  }
+};
+
 class FineLevel {
  public:
   FineLevel() = default;

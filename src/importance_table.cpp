@@ -9,6 +9,7 @@
 #include "envpis_assert.h"
 #include "envpis/equal_area.h"
 #include "fine_level.h"
+#include "map_texel_level.h"
 #include "kernels.h"
 #include "parallel.h"
 #include "texel_importance.h"
@@ -24,7 +25,24 @@ constexpr int kMaxSubdivision = 8;
 constexpr int kMaxSubcells = 1024;  // T S
 constexpr int kMaxFine = 16384;
 constexpr int kAutoFineCap = 2904;  // the automatic N of a 4096 x 2048 map: 67 MB of table
+std::vector<detail::DirectionSums> leaf_directions(const detail::FineLevel& fine);
+Vec3 square_to_sphere(Point2 p) {
+  Vec3 d;
+  detail::scalar::square_to_sphere_one<float>(p.x, p.y, d.x, d.y, d.z);
+  return d;
+}
 }  // namespace
+
+FineTexels parse_fine_texels(const std::string& s) {
+  if (s == "equal-area") return FineTexels::EqualArea;
+  if (s == "map") return FineTexels::Map;
+  if (s == "auto") return FineTexels::Auto;
+  throw Error("unknown fine texels '" + s + "' (expected equal-area, map or auto)");
+}
+
+const char* to_string(FineTexels f) {
+  return f == FineTexels::Map ? "map" : f == FineTexels::Auto ? "auto" : "equal-area";
+}
 
 void validate(const ImportanceTableOptions& options) {
   if (options.top_resolution < 1 || options.top_resolution > kMaxTop)
@@ -49,6 +67,24 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   T_ = options.top_resolution;
   S_ = options.subdivision;
   const int TS = T_ * S_;
+  FineTexels kind = options.fine_texels;
+  if (kind == FineTexels::Auto) kind = map.layout() == MapLayout::LatLong ? FineTexels::Map : FineTexels::EqualArea;
+  if (kind == FineTexels::Map) {
+    if (map.layout() != MapLayout::LatLong) throw Error("fine texels 'map' needs a lat-long map");
+    F_ = N_ = 0;
+    auto level = std::make_shared<detail::MapTexelLevel>(
+        map, TS,
+        detail::MapTexelOptions{options.floor, options.peak_ratio, options.compensated,
+                                map.filter() == MapFilter::Bilinear});
+    map_texels_ = level;
+    integral_ = level->integral();
+    empty_ = !(integral_ > 0);
+    build_levels(level->leaf_sums());
+    build_cones();
+    build_moments(level->leaf_directions());
+    build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return;
+  }
   int n = options.fine_resolution;
   if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)
     const double texels = double(map.width()) * double(map.height());
@@ -65,11 +101,19 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   empty_ = !(integral_ > 0);
   build_levels(fine->build());
   build_cones();
-  build_moments(*fine);
+  build_moments(leaf_directions(*fine));
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-float ImportanceTable::importance(int x, int y) const { return fine_->values()[fine_->index(x, y)]; }
+float ImportanceTable::importance(int x, int y) const {
+  return map_texels_ ? map_texels_->importance(x, y) : fine_->values()[fine_->index(x, y)];
+}
+
+void ImportanceTable::cell_and_sub(int leaf, int& c, int& s) const {
+  const int TS = T_ * S_, lx = leaf % TS, ly = leaf / TS;
+  c = (ly / S_) * T_ + lx / S_;
+  s = (ly % S_) * S_ + lx % S_;
+}
 
 // From the fine level's sums per sub-cell: the top cells' sums, the top level and each cell's
 // sub-cell distribution.
@@ -197,19 +241,9 @@ int leaf_of(int T, int S, int c, int s) { return ((c / T) * S + s / S) * (T * S)
 }  // namespace
 
 namespace {
-// Sums over a fine-level cell's texel centres d: importance-weighted (v d, v) and plain (d, count).
-struct DirectionSums {
-  double v[3] = {0, 0, 0}, w = 0, d[3] = {0, 0, 0}, n = 0;
-  void add(const DirectionSums& o) {
-    for (int k = 0; k < 3; ++k) v[k] += o.v[k], d[k] += o.d[k];
-    w += o.w;
-    n += o.n;
-  }
-};
-
 // The cell's mean direction (normalized) and spread 1 - |mean| into entry i of `soa`; importance
 // weighted, or uniform where the cell has no importance (a compensated table's dark cells).
-void store_moments(std::vector<float> (&soa)[10], std::size_t i, const DirectionSums& s) {
+void store_moments(std::vector<float> (&soa)[10], std::size_t i, const detail::DirectionSums& s) {
   const bool weighted = s.w > 0;
   const double* m = weighted ? s.v : s.d;
   const double total = weighted ? s.w : s.n;
@@ -224,37 +258,41 @@ void store_moments(std::vector<float> (&soa)[10], std::size_t i, const Direction
 }
 }  // namespace
 
-// Per top cell and sub-cell: the importance-weighted mean direction and spread (the product sampler's
-// CellEstimate::Moments), from every fine texel's centre.
-void ImportanceTable::build_moments(const detail::FineLevel& fine) {
-  const int TS = T_ * S_, P = fine.per_cell(), cells = T_ * T_, per = S_ * S_;
+namespace {
+// Per leaf of an equal-area fine level: the sums over its texel centres.
+std::vector<detail::DirectionSums> leaf_directions(const detail::FineLevel& fine) {
+  const int TS = fine.cells(), P = fine.per_cell(), N = fine.resolution();
   const std::vector<float>& values = fine.values();
   const detail::Kernels& k = detail::kernels_for(Simd::Best);
-  std::vector<DirectionSums> leaf(static_cast<std::size_t>(TS) * TS);
+  std::vector<detail::DirectionSums> leaf(static_cast<std::size_t>(TS) * TS);
   detail::parallel_for(0, TS, [&](int begin, int end) {
     std::vector<float> u(P), v(P), x(P), y(P), z(P);
     for (int ly = begin; ly < end; ++ly)
       for (int lx = 0; lx < TS; ++lx) {
-        DirectionSums& s = leaf[static_cast<std::size_t>(ly) * TS + lx];
+        detail::DirectionSums& s = leaf[static_cast<std::size_t>(ly) * TS + lx];
         for (int j = 0; j < P; ++j) {
           const int ty = ly * P + j;
           for (int i = 0; i < P; ++i) {
-            u[i] = (float(lx * P + i) + 0.5f) / float(N_);
-            v[i] = (float(ty) + 0.5f) / float(N_);
+            u[i] = (float(lx * P + i) + 0.5f) / float(N);
+            v[i] = (float(ty) + 0.5f) / float(N);
           }
           k.square_to_sphere(P, u.data(), v.data(), x.data(), y.data(), z.data());
-          for (int i = 0; i < P; ++i) {
-            const double w = values[fine.index(lx * P + i, ty)];
-            s.v[0] += w * x[i], s.v[1] += w * y[i], s.v[2] += w * z[i], s.w += w;
-            s.d[0] += x[i], s.d[1] += y[i], s.d[2] += z[i], s.n += 1;
-          }
+          for (int i = 0; i < P; ++i) s.add({x[i], y[i], z[i]}, values[fine.index(lx * P + i, ty)], 1.0);
         }
       }
   });
+  return leaf;
+}
+}  // namespace
+
+// Per top cell and sub-cell: the importance-weighted mean direction and spread (the product sampler's
+// CellEstimate::Moments), from every fine texel's centre.
+void ImportanceTable::build_moments(const std::vector<detail::DirectionSums>& leaf) {
+  const int cells = T_ * T_, per = S_ * S_;
   for (int c = 0; c < cells; ++c) {
-    DirectionSums cell;
+    detail::DirectionSums cell;
     for (int s = 0; s < per; ++s) {
-      const DirectionSums& l = leaf[static_cast<std::size_t>(leaf_of(T_, S_, c, s))];
+      const detail::DirectionSums& l = leaf[static_cast<std::size_t>(leaf_of(T_, S_, c, s))];
       cell.add(l);
       if (sub_stride_ > 0) store_moments(sub_soa_, static_cast<std::size_t>(c) * sub_stride_ + s, l);
     }
@@ -272,10 +310,20 @@ ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
   return {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_, ly * TS + lx, tx - lx * F, ty - ly * F};
 }
 
-int ImportanceTable::cell_of(Point2 p) const { return locate(p).cell; }
+int ImportanceTable::cell_of(Point2 p) const {
+  if (!map_texels_) return locate(p).cell;
+  int c, sub;
+  cell_and_sub(map_texels_->locate(square_to_sphere(p)).leaf, c, sub);
+  return c;
+}
 
 int ImportanceTable::cell_of_direction(Vec3 d) const {
   if (!is_valid_direction(d)) return -1;
+  if (map_texels_) {
+    int c, sub;
+    cell_and_sub(map_texels_->locate(normalize(d)).leaf, c, sub);
+    return c;
+  }
   return cell_of(equal_area_sphere_to_square(d));
 }
 
@@ -313,14 +361,16 @@ TexelPoint texel_point(int leaf, int TS, int F, const CumulativeDistribution2DVi
           interior};
 }
 
-Vec3 square_to_sphere(Point2 p) {
-  Vec3 d;
-  detail::scalar::square_to_sphere_one<float>(p.x, p.y, d.x, d.y, d.z);
-  return d;
-}
 }  // namespace
 
 float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
+  if (map_texels_) {  // the solid-angle density inside the cell, per unit of the cell's area
+    const detail::MapTexelLevel::Located at = map_texels_->locate(square_to_sphere(p));
+    int cell, sub;
+    cell_and_sub(at.leaf, cell, sub);
+    if (cell != c) return 0.0f;
+    return subcells(c).pmf(sub) * at.density * (4.0f * kPi / (float(T_) * float(T_)));
+  }
   const Located at = locate(p);
   if (at.cell != c) return 0.0f;
   const float F = float(fine_->per_cell());
@@ -339,7 +389,17 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
     ENVPIS_ASSERT(level.valid() && level.width() == S_);
     in = level.sample(cell.offset);
   }
-  const int TS = T_ * S_, F = fine_->per_cell(), leaf = leaf_of(T_, S_, c, in.y * S_ + in.x);
+  const int TS = T_ * S_, leaf = leaf_of(T_, S_, c, in.y * S_ + in.x);
+  if (map_texels_) {
+    const detail::MapTexelLevel::Sample m = map_texels_->sample(leaf, in.offset);
+    out.direction = m.direction;
+    out.cell = c;
+    // Round-off can put a direction on a texel edge into the neighbouring texel: pdf() of the
+    // direction then, so that the two always agree.
+    out.pdf = m.exact ? cell.pmf * in.pmf * m.density : pdf(top, out.direction, sub);
+    return out;
+  }
+  const int F = fine_->per_cell();
   const CumulativeDistribution2DView::Sample texel = fine_->cell(leaf).sample(in.offset);
   const TexelPoint at = texel_point(leaf, TS, F, texel);
   out.direction = square_to_sphere(at.p);
@@ -353,6 +413,15 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
 
 float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return 0.0f;
+  if (map_texels_) {
+    const detail::MapTexelLevel::Located at = map_texels_->locate(normalize(d));
+    int c, s;
+    cell_and_sub(at.leaf, c, s);
+    const float cell_pmf = top.pmf(c);
+    if (!(cell_pmf > 0)) return 0.0f;
+    const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(c) : env_sub_[c]).pmf(s) : 1.0f;
+    return cell_pmf * sub_pmf * at.density;
+  }
   const Point2 p = equal_area_sphere_to_square(d);
   const Located at = locate(p);
   const float cell_pmf = top.pmf(at.cell);
@@ -364,6 +433,14 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const Subc
 
 Point2 ImportanceTable::invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return {0.5f, 0.5f};
+  if (map_texels_) {
+    const Vec3 n = normalize(d);
+    int c, s;
+    cell_and_sub(map_texels_->locate(n).leaf, c, s);
+    Point2 offset = map_texels_->invert(n);
+    if (S_ > 1) offset = (sub ? sub->subcells(c) : env_sub_[c]).invert(s % S_, s / S_, offset);
+    return top.invert(c % T_, c / T_, offset);
+  }
   const Point2 p = equal_area_sphere_to_square(d);
   const Located at = locate(p);
   const int TS = T_ * S_, F = fine_->per_cell();
@@ -389,7 +466,7 @@ detail::CellArrays detail::subcell_arrays(const ImportanceTable& t, int c) {
 
 std::size_t ImportanceTable::bytes_used() const {
   std::size_t b = sizeof(*this);
-  b += fine_->bytes_used();
+  b += fine_ ? fine_->bytes_used() : map_texels_->bytes_used();
   b += static_cast<std::size_t>(top_.padded_size() + 2 * T_) * sizeof(float);
   b += (cones_.capacity() + sub_cones_.capacity()) * sizeof(Cone);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
@@ -400,6 +477,10 @@ std::size_t ImportanceTable::bytes_used() const {
 }
 
 std::size_t ImportanceTable::single_level_bytes() const {
+  if (map_texels_) {
+    const std::size_t w = static_cast<std::size_t>(map_texels_->width()), h = static_cast<std::size_t>(map_texels_->height());
+    return sizeof(float) * (w * h + h * (w + 1) + h + (h + 1));
+  }
   const std::size_t n = static_cast<std::size_t>(N_);
   return sizeof(float) * (n * n + n * (n + 1) + n + (n + 1));
 }

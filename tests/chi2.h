@@ -238,4 +238,35 @@ Chi2Result sampler_chi2(const Sampler& sampler, const Chi2Options& opt) {
       [&](Vec3 d) { return double(sampler.pdf(d)); }, opt);
 }
 
+
+/// The test of a sampler whose density is constant over each texel of a w x h lat-long map (an
+/// ImportanceTable with FineTexels::Map and the samplers on it): one bin per map texel, its expected
+/// count exactly N pdf(texel centre) times the texel's solid angle. texel(d) is the map's texel of
+/// direction d (row-major index), centre(t) the world direction of texel t's centre.
+inline Chi2Result texel_chi2(const std::function<std::optional<Vec3>(float, float)>& sample,
+                             const std::function<double(Vec3)>& pdf, int w, int h,
+                             const std::function<std::size_t(Vec3)>& texel,
+                             const std::function<Vec3(std::size_t)>& centre, const Chi2Options& opt = {}) {
+  chi2_detail::Histograms hist;
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  hist.expected.assign(n + 1, 0.0);
+  hist.observed = hist.expected;
+  for (std::size_t t = 0; t < n; ++t) {
+    const int y = static_cast<int>(t / w);
+    const double sr = 2.0 * M_PI / w * (std::cos(M_PI * y / h) - std::cos(M_PI * (y + 1) / h));
+    const double mass = pdf(centre(t)) * sr;
+    hist.expected[t] = mass * opt.samples;
+    hist.integral += mass;
+  }
+  hist.expected[n] = std::max(0.0, 1.0 - hist.integral) * opt.samples;
+  std::mt19937_64 rng(opt.seed);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  for (std::size_t k = 0; k < opt.samples; ++k) {
+    const float u1 = U(rng), u2 = U(rng);
+    const auto d = sample(u1, u2);
+    hist.observed[d ? texel(*d) : n] += 1;
+  }
+  return chi2_detail::evaluate(hist, opt);
+}
+
 }  // namespace envpis::test

@@ -107,6 +107,12 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "least the map's texel count)")
       ->type_name("N")
       ->capture_default_str();
+  sub.add_option("--fine-texels", fine_texels,
+                 "light tables: the fine level's texels: equal-area (N x N, see --fine), map (a lat-long map's own "
+                 "texels: a light sample's weight is constant over each map texel; docs/cycles.md) or auto (map "
+                 "for lat-long maps); the oracle always uses equal-area")
+      ->type_name("equal-area|map|auto")
+      ->capture_default_str();
   sub.add_option("--peak-ratio", peak_ratio,
                  "light tables: each texel's importance is at least 1/K of the radiance eval reaches in it "
                  "(K; 0: off; default: the library's)")
@@ -170,6 +176,11 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   o.light_table.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
   o.light_table.fine_resolution = static_cast<int>(parse_integer("--fine", fine, 0, 16384));
   if (!peak_ratio.empty()) o.light_table.peak_ratio = parse_peak_ratio(peak_ratio);
+  try {
+    o.light_table.fine_texels = parse_fine_texels(fine_texels);
+  } catch (const Error& e) {
+    throw Error(std::string("--fine-texels: ") + e.what());
+  }
   o.oracle.resolution = static_cast<int>(parse_integer("--oracle-res", oracle_res, 1, 256));
   o.oracle.directions = static_cast<int>(parse_integer("--oracle-dirs", oracle_dirs, 1, 256));
   const int k = static_cast<int>(std::lround(std::sqrt(double(o.oracle.directions))));

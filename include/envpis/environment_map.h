@@ -78,6 +78,11 @@ struct MapLoadReport {
   std::string extension_format;
 };
 
+/// A texel of a map image: column x, row y (top row 0).
+struct TexelCoord {
+  int x = 0, y = 0;
+};
+
 class EnvironmentMap {
  public:
   /// Loads an OpenEXR, Radiance HDR (or any other format OpenImageIO reads) file. Throws Error naming
@@ -129,6 +134,10 @@ class EnvironmentMap {
   /// a file extension naming another format than the content's, a lat-long map that is not 2:1.
   /// Empty when there is nothing to say. (An all-black map is for the caller to judge: is_black().)
   std::vector<std::string> warnings() const;
+  /// The texel that texture point uv (lat-long u, v or equal-area x, y) lies in: the one a Nearest
+  /// look-up returns. Outside [0,1) a lat-long map wraps in u and clamps in v; an equal-area map wraps
+  /// across its edges as the sphere does. Non-finite uv give texel (0, 0).
+  TexelCoord texel_coord(Point2 uv) const;
   /// Texel (x, y) after repair and scale.
   Rgb texel(int x, int y) const {
     const float* p = &pixels_[(static_cast<std::size_t>(y) * width_ + x) * 3];
@@ -141,7 +150,6 @@ class EnvironmentMap {
   void finish(const EnvironmentMapOptions& options);
   Rgb bilinear_latlong(float u, float v) const;
   Rgb bilinear_equal_area(float x, float y) const;
-  Rgb nearest(float x, float y) const;
 
   int width_ = 0, height_ = 0;
   MapLayout layout_ = MapLayout::LatLong;
@@ -160,5 +168,8 @@ class EnvironmentMap {
 /// orientation lives in to_map / to_world, so this is the one lat-long formula for both orientations.
 Point2 direction_to_latlong(Vec3 d);
 Vec3 latlong_to_direction(Point2 uv);
+/// The texel of a width x height lat-long image that texture point uv lies in (wraps in u, clamps in
+/// v): EnvironmentMap::texel_coord of a lat-long map. Non-finite uv give texel (0, 0).
+TexelCoord latlong_texel(Point2 uv, int width, int height);
 
 }  // namespace envpis

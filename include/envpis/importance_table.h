@@ -46,6 +46,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "envpis/common.h"
@@ -56,7 +57,20 @@ namespace envpis {
 
 namespace detail {
 class FineLevel;
+class MapTexelLevel;
+struct DirectionSums;
 }
+
+/// What the fine level's texels are.
+enum class FineTexels {
+  EqualArea,  ///< N x N equal-area texels (the rule above); any map layout
+  Map,        ///< the lat-long map's own texels (lat-long maps only; see below)
+  Auto,       ///< Map for a lat-long map, EqualArea for an equal-area one
+};
+
+/// Parses "equal-area", "map" or "auto"; throws Error otherwise.
+FineTexels parse_fine_texels(const std::string& s);
+const char* to_string(FineTexels f);
 
 struct ImportanceTableOptions {
   int top_resolution = 12;  ///< T, 1..256
@@ -73,6 +87,15 @@ struct ImportanceTableOptions {
   /// with MIS next to BSDF sampling: its density is zero wherever the map is darker than its mean.
   /// A constant map falls back to the uncompensated table.
   bool compensated = false;
+  /// FineTexels::Map: the fine level is the lat-long map's own texels. Each map texel belongs to the
+  /// sub-cell (or top cell) that holds its centre, so cells are unions of whole map texels; inside a
+  /// cell a texel is chosen in proportion to importance x solid angle and the direction is uniform in
+  /// solid angle inside it. The density is then constant over each map texel, so under nearest
+  /// look-ups a light sample's weight does not depend on where inside the texel it lands (which u
+  /// cannot stratify); see docs/cycles.md. Importance is the texel's channel average (raised by the
+  /// peak bound to 1/K of its 3 x 3 neighbourhood's largest under bilinear look-ups), floored or
+  /// compensated as above. fine_resolution() is then 0 and importance(x, y) refers to map texels.
+  FineTexels fine_texels = FineTexels::EqualArea;
 };
 
 /// Throws Error naming the first invalid option (what the ImportanceTable constructor checks), so
@@ -113,7 +136,9 @@ class ImportanceTable {
   int top_resolution() const { return T_; }   ///< T
   int subdivision() const { return S_; }      ///< S: sub-cells per top cell along one axis
   int cell_resolution() const { return F_; }  ///< F: fine texels per top cell along one axis
-  int fine_resolution() const { return N_; }  ///< N = T * F
+  int fine_resolution() const { return N_; }  ///< N = T * F (0 when fine_texels() is Map)
+  /// The fine level's texels: EqualArea or Map (never Auto).
+  FineTexels fine_texels() const { return map_texels_ ? FineTexels::Map : FineTexels::EqualArea; }
   int cell_count() const { return T_ * T_; }
   bool empty() const { return empty_; }
   /// Sum over the sphere of the importance (average RGB radiance integrated over solid angle).
@@ -154,7 +179,8 @@ class ImportanceTable {
   /// Probability E[c] of top cell c (sums to 1 over the cells, all 0 when empty()).
   float cell_probability(int c) const { return top_.pmf(c); }
   const Cone& cell_cone(int c) const { return cones_[c]; }
-  /// Importance of fine texel (x, y), 0 <= x, y < N (equal-area square, y down).
+  /// Importance of fine texel (x, y), 0 <= x, y < N (equal-area square, y down); for a Map table, of
+  /// map texel (x, y), 0 <= x < width, 0 <= y < height.
   float importance(int x, int y) const;
   /// Density of the environment's distribution inside cell c (sub-cell, then fine) at equal-area
   /// point p, normalized over the cell's area.
@@ -176,7 +202,8 @@ class ImportanceTable {
   friend detail::CellArrays detail::subcell_arrays(const ImportanceTable& table, int c);
   void build_levels(const std::vector<double>& subcell_sums);
   void build_cones();
-  void build_moments(const detail::FineLevel& fine);
+  void build_moments(const std::vector<detail::DirectionSums>& leaf);
+  void cell_and_sub(int leaf, int& c, int& s) const;  // the top cell and sub-cell of a leaf
   struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell,
     int cell, sub, leaf, tx, ty;  // texel (tx, ty) in the fine-level cell
   };
@@ -187,6 +214,7 @@ class ImportanceTable {
   double integral_ = 0;
   double build_seconds_ = 0;
   std::shared_ptr<const detail::FineLevel> fine_;  // immutable: copies of the table share it
+  std::shared_ptr<const detail::MapTexelLevel> map_texels_;  // instead of fine_ for FineTexels::Map
   DiscreteDistribution2D top_;
   std::vector<DiscreteDistribution2D> env_sub_;  // T^2 of S x S (empty when S = 1)
   DiscreteDistribution2D whole_cell_;            // S = 1: the one sub-cell

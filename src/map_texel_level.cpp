@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "map_texel_level.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "envpis/equal_area.h"
+#include "envpis_assert.h"
+#include "parallel.h"
+
+namespace envpis::detail {
+
+namespace {
+// The matrix of the map's to_map, from the images of the axes (its columns).
+Mat3 to_map_matrix(const EnvironmentMap& map) {
+  Mat3 m;
+  const Vec3 col[3] = {map.to_map({1, 0, 0}), map.to_map({0, 1, 0}), map.to_map({0, 0, 1})};
+  for (int j = 0; j < 3; ++j) {
+    m.m[0][j] = col[j].x;
+    m.m[1][j] = col[j].y;
+    m.m[2][j] = col[j].z;
+  }
+  return m;
+}
+}  // namespace
+
+MapTexelLevel::MapTexelLevel(const EnvironmentMap& map, int leaves, const MapTexelOptions& options)
+    : to_map_(to_map_matrix(map)), to_world_(to_map_.transposed()), w_(map.width()), h_(map.height()),
+      leaves_(leaves) {
+  ENVPIS_ASSERT(map.layout() == MapLayout::LatLong && leaves >= 1);
+  // 1 - cos theta in the northern half, 1 + cos theta in the southern one: both small near their pole,
+  // where cos theta itself is within float round-off of +-1 across a whole polar row.
+  row_qn_.resize(static_cast<std::size_t>(h_) + 1);
+  row_qs_.resize(static_cast<std::size_t>(h_) + 1);
+  for (int y = 0; y <= h_; ++y) {  // 2 sin^2(theta / 2) and 2 cos^2(theta / 2): no cancellation
+    const double sn = std::sin(0.5 * kPi * double(y) / h_), cs = std::cos(0.5 * kPi * double(y) / h_);
+    row_qn_[y] = static_cast<float>(2 * sn * sn);
+    row_qs_[y] = static_cast<float>(2 * cs * cs);
+  }
+  row_sr_.resize(static_cast<std::size_t>(h_));
+  for (int y = 0; y < h_; ++y) {  // (2 pi / w)(cos theta0 - cos theta1), in double for the thin polar rows
+    const double c0 = std::cos(kPi * double(y) / h_), c1 = std::cos(kPi * double(y + 1) / h_);
+    row_sr_[y] = static_cast<float>(2.0 * kPi / w_ * (c0 - c1));
+  }
+  imp_.resize(static_cast<std::size_t>(w_) * h_);
+  parallel_for(0, h_, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y)
+      for (int x = 0; x < w_; ++x) imp_[static_cast<std::size_t>(y) * w_ + x] = map.texel(x, y).average();
+  });
+  compute_importance(options);
+  assign_leaves(leaves);
+  build_leaf_cdfs();
+}
+
+namespace {
+// The largest channel average among texel (x, y) and its eight neighbours (wrapping in x, clamped in
+// y): every texel a bilinear look-up inside texel (x, y) interpolates between.
+float neighbourhood_max(const std::vector<float>& lum, int w, int h, int x, int y) {
+  float m = 0;
+  for (int j = std::max(0, y - 1); j <= std::min(h - 1, y + 1); ++j)
+    for (int i = -1; i <= 1; ++i) {
+      const int xi = (x + i + w) % w;
+      m = std::max(m, lum[static_cast<std::size_t>(j) * w + xi]);
+    }
+  return m;
+}
+}  // namespace
+
+// importance = the texel's channel average (what a nearest look-up returns), raised by the peak bound
+// where look-ups are bilinear, then floored or MIS-compensated against the mean per steradian.
+void MapTexelLevel::compute_importance(const MapTexelOptions& options) {
+  if (options.peak_ratio > 0 && options.bilinear) {
+    const std::vector<float> lum = imp_;
+    const float inv_k = 1.0f / options.peak_ratio;
+    parallel_for(0, h_, [&](int begin, int end) {
+      for (int y = begin; y < end; ++y)
+        for (int x = 0; x < w_; ++x) {
+          float& v = imp_[static_cast<std::size_t>(y) * w_ + x];
+          v = std::max(v, neighbourhood_max(lum, w_, h_, x, y) * inv_k);
+        }
+    });
+  }
+  double sum = 0, lo = std::numeric_limits<double>::max(), hi = 0;
+  for (int y = 0; y < h_; ++y)
+    for (int x = 0; x < w_; ++x) {
+      const double v = imp_[static_cast<std::size_t>(y) * w_ + x];
+      sum += v * row_sr_[y];
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  if (!(sum > 0) || !std::isfinite(sum)) {
+    std::fill(imp_.begin(), imp_.end(), 0.0f);
+    integral_ = 0;
+    return;
+  }
+  const float mean = static_cast<float>(sum / (4.0 * kPi));
+  // A constant map's compensated table is the plain one (it would be empty).
+  if (options.compensated && hi - lo > 1e-6 * hi) {
+    double csum = 0;
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        float& v = imp_[static_cast<std::size_t>(y) * w_ + x];
+        v = std::max(0.0f, v - mean);
+        csum += double(v) * row_sr_[y];
+      }
+    integral_ = csum;
+    return;
+  }
+  const float min_value = options.floor * mean;
+  if (min_value > 0) {
+    sum = 0;
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        float& v = imp_[static_cast<std::size_t>(y) * w_ + x];
+        v = std::max(v, min_value);
+        sum += double(v) * row_sr_[y];
+      }
+  }
+  integral_ = sum;
+}
+
+// Each texel to the leaf holding its centre's world direction; entries grouped by leaf (a counting
+// sort that keeps row-major order inside each leaf, so neighbouring u pick neighbouring texels).
+void MapTexelLevel::assign_leaves(int leaves) {
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  leaf_of_.resize(n);
+  parallel_for(0, h_, [&](int begin, int end) {
+    for (int y = begin; y < end; ++y)
+      for (int x = 0; x < w_; ++x) {
+        const Vec3 m = latlong_to_direction({(float(x) + 0.5f) / float(w_), (float(y) + 0.5f) / float(h_)});
+        const Point2 p = equal_area_sphere_to_square(to_world_ * m);
+        const int lx = std::clamp(static_cast<int>(p.x * float(leaves)), 0, leaves - 1);
+        const int ly = std::clamp(static_cast<int>(p.y * float(leaves)), 0, leaves - 1);
+        leaf_of_[static_cast<std::size_t>(y) * w_ + x] = static_cast<std::uint32_t>(ly * leaves + lx);
+      }
+  });
+  const std::size_t L = static_cast<std::size_t>(leaves) * leaves;
+  start_.assign(L + 1, 0);
+  for (std::uint32_t l : leaf_of_) ++start_[l + 1];
+  for (std::size_t l = 0; l < L; ++l) start_[l + 1] += start_[l];
+  std::vector<std::uint32_t> next(start_.begin(), start_.end() - 1);
+  texel_.resize(n);
+  for (std::size_t t = 0; t < n; ++t) texel_[next[leaf_of_[t]]++] = static_cast<std::uint32_t>(t);
+}
+
+void MapTexelLevel::build_leaf_cdfs() {
+  const int L = leaves_ * leaves_;
+  cdf_.assign(texel_.size(), 0.0f);
+  leaf_sum_.assign(static_cast<std::size_t>(L), 0.0);
+  inv_leaf_sum_.assign(static_cast<std::size_t>(L), 0.0f);
+  parallel_for(0, L, [&](int begin, int end) {
+    for (int l = begin; l < end; ++l) {
+      double run = 0;
+      for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
+        const std::uint32_t t = texel_[e];
+        run += double(imp_[t]) * row_sr_[t / static_cast<std::uint32_t>(w_)];
+      }
+      leaf_sum_[l] = run;
+      if (!(run > 0)) continue;  // never chosen: every level above weighs a leaf by its sum
+      inv_leaf_sum_[l] = static_cast<float>(1.0 / run);
+      double acc = 0;
+      for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
+        const std::uint32_t t = texel_[e];
+        acc += double(imp_[t]) * row_sr_[t / static_cast<std::uint32_t>(w_)];
+        cdf_[e] = static_cast<float>(acc / run);
+      }
+      cdf_[start_[l + 1] - 1] = 1.0f;
+    }
+  });
+}
+
+int MapTexelLevel::texel_of(Vec3 world) const {
+  const TexelCoord t = latlong_texel(direction_to_latlong(to_map_ * world), w_, h_);
+  return t.y * w_ + t.x;
+}
+
+MapTexelLevel::Sample MapTexelLevel::sample(int leaf, Point2 u) const {
+  ENVPIS_ASSERT(leaf >= 0 && leaf < leaves_ * leaves_ && leaf_sum_[leaf] > 0);
+  const float* first = cdf_.data() + start_[leaf];
+  const float* last = cdf_.data() + start_[leaf + 1];
+  const float uy = clamp_unit(u.y);
+  const float* it = std::min(std::upper_bound(first, last, uy), last - 1);
+  const float c0 = it > first ? it[-1] : 0.0f, c1 = *it;
+  const float r = c1 > c0 ? clamp_unit((uy - c0) / (c1 - c0)) : 0.5f;
+  const std::uint32_t t = texel_[static_cast<std::size_t>(it - cdf_.data())];
+  const int x = static_cast<int>(t % static_cast<std::uint32_t>(w_)), y = static_cast<int>(t / static_cast<std::uint32_t>(w_));
+  // Uniform in solid angle inside the texel: azimuth linear in u.x, cos theta linear in r (through
+  // q = 1 -+ cos theta, see row_qn_). Both kept a thousandth of the texel from its edges, so that the
+  // direction looks this texel up again despite round-off.
+  constexpr float kMargin = 1e-3f;
+  const float a = std::clamp(clamp_unit(u.x), kMargin, 1 - kMargin), b = std::clamp(r, kMargin, 1 - kMargin);
+  const float phi = 2.0f * kPi * (float(x) + a) / float(w_);
+  const bool north = 2 * y + 1 <= h_;  // the row's centre is not south of the equator
+  const std::vector<float>& rq = north ? row_qn_ : row_qs_;
+  const float q = rq[y] + b * (rq[y + 1] - rq[y]);  // theta increases with b in both halves
+  const float z = north ? 1.0f - q : q - 1.0f;
+  const float s = std::sqrt(std::max(0.0f, q * (2.0f - q)));
+  Sample out;
+  out.direction = normalize(to_world_ * Vec3{s * std::cos(phi), s * std::sin(phi), z});
+  out.density = imp_[t] * inv_leaf_sum_[leaf];
+  out.exact = texel_of(out.direction) == static_cast<int>(t);
+  return out;
+}
+
+MapTexelLevel::Located MapTexelLevel::locate(Vec3 d) const {
+  const int t = texel_of(d);
+  const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
+  return {static_cast<int>(leaf), imp_[static_cast<std::size_t>(t)] * inv_leaf_sum_[leaf]};
+}
+
+Point2 MapTexelLevel::invert(Vec3 d) const {
+  const int t = texel_of(d);
+  const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
+  const auto* first = texel_.data() + start_[leaf];
+  const auto* last = texel_.data() + start_[leaf + 1];
+  const std::size_t e = static_cast<std::size_t>(std::lower_bound(first, last, static_cast<std::uint32_t>(t)) - texel_.data());
+  const float c0 = e > start_[leaf] ? cdf_[e - 1] : 0.0f, c1 = cdf_[e];
+  const int x = t % w_, y = t / w_;
+  const Vec3 m = to_map_ * d;
+  // q of the direction as sample() computes it: 1 - z north, 1 + z south, from the polar angle.
+  const float theta = direction_to_latlong(m).y * kPi;
+  const bool north = 2 * y + 1 <= h_;
+  const float half = 0.5f * (north ? theta : kPi - theta);
+  const float q = 2.0f * std::sin(half) * std::sin(half);
+  const std::vector<float>& rq = north ? row_qn_ : row_qs_;
+  const float r = rq[y + 1] != rq[y] ? clamp_unit((q - rq[y]) / (rq[y + 1] - rq[y])) : 0.5f;
+  const float ux = direction_to_latlong(m).x * float(w_) - float(x);
+  return {clamp_unit(ux), clamp_unit(c0 + r * (c1 - c0))};
+}
+
+std::vector<DirectionSums> MapTexelLevel::leaf_directions() const {
+  std::vector<DirectionSums> out(static_cast<std::size_t>(leaves_) * leaves_);
+  for (int y = 0; y < h_; ++y)
+    for (int x = 0; x < w_; ++x) {
+      const std::size_t t = static_cast<std::size_t>(y) * w_ + x;
+      const Vec3 m = latlong_to_direction({(float(x) + 0.5f) / float(w_), (float(y) + 0.5f) / float(h_)});
+      out[leaf_of_[t]].add(to_world_ * m, double(imp_[t]) * row_sr_[y], row_sr_[y]);
+    }
+  return out;
+}
+
+std::size_t MapTexelLevel::bytes_used() const {
+  return sizeof(*this) + (row_sr_.capacity() + row_qn_.capacity() + row_qs_.capacity() + imp_.capacity() + cdf_.capacity() +
+                          inv_leaf_sum_.capacity()) * sizeof(float) +
+         (leaf_of_.capacity() + start_.capacity() + texel_.capacity()) * sizeof(std::uint32_t) +
+         leaf_sum_.capacity() * sizeof(double);
+}
+
+}  // namespace envpis::detail
