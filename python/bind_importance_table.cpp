@@ -3,6 +3,8 @@
 // importance and cell probabilities as arrays (for plots).
 #include <envpis/importance_table.h>
 
+#include <string>
+
 #include "arrays.h"
 #include "module.h"
 
@@ -14,8 +16,10 @@ using envpis::ImportanceTable;
 using envpis::ImportanceTableOptions;
 
 ImportanceTable make_table(const envpis::EnvironmentMap& map, int top_resolution, int fine_resolution,
-                           float floor, float peak_ratio, bool compensated, int subdivision) {
+                           float floor, float peak_ratio, bool compensated, int subdivision,
+                           const std::string& fine_texels) {
   ImportanceTableOptions o;
+  o.fine_texels = envpis::parse_fine_texels(fine_texels);
   o.top_resolution = top_resolution;
   o.subdivision = subdivision;
   o.fine_resolution = fine_resolution;
@@ -27,12 +31,12 @@ ImportanceTable make_table(const envpis::EnvironmentMap& map, int top_resolution
 }
 
 py::array_t<float> importance(const ImportanceTable& t) {
-  const int n = t.fine_resolution();
-  py::array_t<float> out({n, n});
+  const int w = t.importance_width(), h = t.importance_height();
+  py::array_t<float> out({h, w});
   float* o = out.mutable_data();
   py::gil_scoped_release release;
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) o[static_cast<std::size_t>(y) * n + x] = t.importance(x, y);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) o[static_cast<std::size_t>(y) * w + x] = t.importance(x, y);
   return out;
 }
 
@@ -54,9 +58,10 @@ void bind_importance_table(py::module_& m) {
       .def(py::init(&make_table), py::arg("map"), py::arg("top_resolution") = d.top_resolution,
            py::arg("fine_resolution") = d.fine_resolution, py::arg("floor") = d.floor,
            py::arg("peak_ratio") = d.peak_ratio, py::arg("compensated") = d.compensated,
-           py::arg("subdivision") = d.subdivision,
+           py::arg("subdivision") = d.subdivision, py::arg("fine_texels") = envpis::to_string(d.fine_texels),
            "fine_resolution 0: derived from the map's texel count; subdivision: S x S sub-cells per top "
-           "cell (a refined ProductSampler needs S > 1). envpis.Error for invalid options.")
+           "cell (a refined ProductSampler needs S > 1); fine_texels: 'equal-area', 'map' (a lat-long "
+           "map's own texels) or 'auto'. envpis.Error for invalid options.")
       .def(
           "sample",
           [](const ImportanceTable& t, py::handle u) {
@@ -71,7 +76,11 @@ void bind_importance_table(py::module_& m) {
             return map_rows(dirs, "dirs", 3, 1, [&t](const float* d, float* p) { *p = t.pdf({d[0], d[1], d[2]}); });
           },
           py::arg("dirs"), "Density (solid angle) of sample() at directions (N x 3) -> N.")
-      .def("importance", &importance, "Fine texel importance, N x N on the equal-area square (row = y).")
+      .def("importance", &importance,
+           "Fine texel importance: N x N on the equal-area square (row = y), or the map's height x width "
+           "for fine_texels 'map'.")
+      .def_property_readonly("fine_texels",
+                             [](const ImportanceTable& t) { return std::string(envpis::to_string(t.fine_texels())); })
       .def("cell_probabilities", &cell_probabilities, "Top cell probabilities E[c], T x T (sum 1).")
       .def_property_readonly("top_resolution", &ImportanceTable::top_resolution)
       .def_property_readonly("fine_resolution", &ImportanceTable::fine_resolution)

@@ -445,8 +445,16 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
   validate(options_);
   const auto t0 = std::chrono::steady_clock::now();
   const EnvironmentMap& env = scene.environment();
+  // Its quadrature runs over the equal-area fine texels: tables with the map's own texels
+  // (FineTexels::Map) are analyzed through their equal-area twins, built with the same options.
+  ImportanceTableOptions equal_area = options_.light_table;
+  equal_area.fine_texels = FineTexels::EqualArea;
   auto build = [&](Strategy s) {
-    return source ? source(s) : StrategyTables::build(env, s, options_.oracle, options_.product, options_.light_table);
+    if (source) {
+      StrategyTables t = source(s);
+      if (!t.table || t.table->fine_texels() == FineTexels::EqualArea) return t;
+    }
+    return StrategyTables::build(env, s, options_.oracle, options_.product, equal_area);
   };
   // Distribution 0 is the environment table (env, mis, and the limits' fine density); the product
   // shares it, as the renderer's product strategy does.

@@ -32,7 +32,9 @@
 // midpoint error on one of them (estimated from the second differences to its neighbours) exceeds
 // `refine_tolerance` of it, is evaluated again on a refine x refine grid of points (the lobe's peak, a
 // sun's edge, the horizon), and refine times finer again while that still moves its integrals (up
-// to 64 x 64 points per texel). Accuracy and cost are measured in docs/analyzer.md. Visibility is off by
+// to 64 x 64 points per texel). Tables with the map's own texels (FineTexels::Map) are not piecewise
+// constant on that grid: the analyzer analyzes their equal-area twins (same options, EqualArea)
+// instead. Accuracy and cost are measured in docs/analyzer.md. Visibility is off by
 // default, except for the one certain case: a closed transmissive surface's inside (local z < 0)
 // never sees the environment (Material::set_closed_surface). With `visibility` every quadrature
 // direction is traced.

@@ -7,6 +7,9 @@ PFM) and on all of sunrise. Both builds are measured against one reference (mis,
 build): the table change does not move the converged image. docs/cycles.md has the results.
 
   /usr/bin/python3 scripts/sun_sphere.py OLD_ENVPIS NEW_ENVPIS [OUT_DIR]   (SIZE=128 REF=4096 STRATS=env,mis)
+
+OLD_ARGS / NEW_ARGS add options to each build's render command (e.g. NEW_ARGS='--fine-texels map', with
+the same binary for both builds); MAPS=sun,sunrise,nosun picks the maps (nosun: sunrise with its sun black).
 """
 import os
 import sys
@@ -19,11 +22,15 @@ import cycles_compare as cc  # noqa: E402  (its EXR reader, scene and relMSE)
 SUNRISE = "/usr/share/blender/datafiles/studiolights/world/sunrise.exr"
 
 
-def write_sun_only(path):
+def write_sun_only(path, without_sun=False):
     img, _ = cc.read_exr(SUNRISE)
     idx = np.argsort(img.mean(axis=2).ravel())[::-1][:53]
-    out = np.zeros_like(img, dtype=np.float32)
-    out.reshape(-1, 3)[idx] = img.reshape(-1, 3)[idx]
+    if without_sun:
+        out = img.astype(np.float32).copy()
+        out.reshape(-1, 3)[idx] = 0
+    else:
+        out = np.zeros_like(img, dtype=np.float32)
+        out.reshape(-1, 3)[idx] = img.reshape(-1, 3)[idx]
     h, w, _ = out.shape
     with open(path, "wb") as f:  # PFM: little-endian (negative scale), rows bottom to top
         f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
@@ -35,13 +42,26 @@ class Args:
 
 
 def main(argv):
-    builds = {"old": argv[1], "new": argv[2]}
     out_dir = argv[3] if len(argv) > 3 else "out/sun-sphere"
     os.makedirs(out_dir, exist_ok=True)
+    builds = {}
+    for name, exe in (("old", argv[1]), ("new", argv[2])):
+        extra = os.environ.get(name.upper() + "_ARGS", "")
+        if extra:  # a wrapper that appends the options (the render helper takes a bare executable)
+            wrapper = os.path.join(out_dir, name + "-envpis.sh")
+            with open(wrapper, "w") as f:
+                f.write('#!/bin/sh\nexec %s "$@" %s\n' % (os.path.abspath(exe), extra))
+            os.chmod(wrapper, 0o755)
+            exe = wrapper
+        builds[name] = exe
     size = int(os.environ.get("SIZE", 128))
     sun = os.path.join(out_dir, "sun.pfm")
     if not os.path.exists(sun):
         write_sun_only(sun)
+    nosun = os.path.join(out_dir, "nosun.pfm")
+    if not os.path.exists(nosun):
+        write_sun_only(nosun, without_sun=True)
+    maps = {"sun": sun, "sunrise": SUNRISE, "nosun": nosun}
     scene = os.path.join(out_dir, "scene.json")
     cc.scene_json(scene, size, 0.25)
     mask = cc.sphere_mask(size)
@@ -53,8 +73,9 @@ def main(argv):
         cc.envpis_render(a, scene, env, strat, spp, seed, out)
         return cc.read_exr(out)[0]
 
-    for env_name, env in (("sun", sun), ("sunrise", SUNRISE)):
-        ref = render(builds["new"], env, "mis", int(os.environ.get("REF", 4096)), 99, env_name + "-ref")
+    for env_name in os.environ.get("MAPS", "sun,sunrise").split(","):
+        env = maps[env_name]
+        ref = render(builds["old"], env, "mis", int(os.environ.get("REF", 4096)), 99, env_name + "-ref")
         lum = ref.mean(axis=2)
         top = mask & (lum >= np.percentile(lum[mask], 75))
         for strat in os.environ.get("STRATS", "env,mis").split(","):

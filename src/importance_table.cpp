@@ -109,6 +109,9 @@ float ImportanceTable::importance(int x, int y) const {
   return map_texels_ ? map_texels_->importance(x, y) : fine_->values()[fine_->index(x, y)];
 }
 
+int ImportanceTable::importance_width() const { return map_texels_ ? map_texels_->width() : N_; }
+int ImportanceTable::importance_height() const { return map_texels_ ? map_texels_->height() : N_; }
+
 void ImportanceTable::cell_and_sub(int leaf, int& c, int& s) const {
   const int TS = T_ * S_, lx = leaf % TS, ly = leaf / TS;
   c = (ly / S_) * T_ + lx / S_;

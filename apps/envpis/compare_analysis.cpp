@@ -46,11 +46,18 @@ void analyze_shading_points(CompareSession& session, Comparison& c) {
     const EnvironmentMap& env = session.scene.environment();
     // The compared strategies' tables are the renders' own; the others are built once, with the same options.
     std::map<Strategy, StrategyTables> others;
+    // The analyzer integrates over equal-area fine texels (render/analyzer.h): renders with the map's own
+    // texels are analyzed through equal-area twins of their tables.
+    ImportanceTableOptions equal_area = base.light_table;
+    equal_area.fine_texels = FineTexels::EqualArea;
     auto source = [&](Strategy st) {
-      if (contains(s.strategies, st)) return session.tables_for(st);
+      if (contains(s.strategies, st)) {
+        StrategyTables t = session.tables_for(st);
+        if (!t.table || t.table->fine_texels() == FineTexels::EqualArea) return t;
+      }
       auto it = others.find(st);
       if (it == others.end())
-        it = others.emplace(st, StrategyTables::build(env, st, base.oracle, base.product, base.light_table)).first;
+        it = others.emplace(st, StrategyTables::build(env, st, base.oracle, base.product, equal_area)).first;
       return it->second;
     };
     const int fine = source(Strategy::Mis).table->fine_resolution();

@@ -55,7 +55,7 @@ struct SceneOptionArgs {
   std::string threads = "0";
   std::string top = "12", fine = "0", subcells = "4";
   std::string peak_ratio;  // empty: the library's default
-  std::string fine_texels = "equal-area";
+  std::string fine_texels = "auto";  // the renderer's default: the map's own texels for lat-long maps
   std::string oracle_res = "48", oracle_dirs = "4", oracle_compensation = "on";
   std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
       cell_estimate;  // empty: the library's defaults

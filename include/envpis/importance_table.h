@@ -182,6 +182,9 @@ class ImportanceTable {
   /// Importance of fine texel (x, y), 0 <= x, y < N (equal-area square, y down); for a Map table, of
   /// map texel (x, y), 0 <= x < width, 0 <= y < height.
   float importance(int x, int y) const;
+  /// The grid importance(x, y) reads: N x N, or the map's width x height for a Map table.
+  int importance_width() const;
+  int importance_height() const;
   /// Density of the environment's distribution inside cell c (sub-cell, then fine) at equal-area
   /// point p, normalized over the cell's area.
   float pdf_in_cell(int c, Point2 p) const;

@@ -50,6 +50,19 @@ def test_table_arrays(table):
     assert table.integral > 0 and table.cell_resolution * 12 == table.fine_resolution
 
 
+def test_map_texel_table():
+    px = sky_pixels(16, 32)
+    env = envpis.EnvironmentMap.from_array(px, layout="latlong")
+    t = envpis.ImportanceTable(env, fine_texels="map", subdivision=2)
+    assert t.fine_texels == "map" and t.fine_resolution == 0
+    imp = t.importance()
+    assert imp.shape == (16, 32) and np.all(imp > 0)
+    d, p = t.sample(np.random.default_rng(2).random((500, 2)))
+    np.testing.assert_allclose(t.pdf(d), p, rtol=1e-4)
+    with pytest.raises(envpis.Error, match="fine texels"):
+        envpis.ImportanceTable(env, fine_texels="latlong")
+
+
 def test_scale_and_rotation():
     px = sky_pixels(16, 32)
     rot = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], float)  # 90 degrees about +Z
