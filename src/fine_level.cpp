@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "fine_level.h"
 
+#include "huge_pages.h"
 #include "parallel.h"
 
 namespace envpis::detail {
@@ -20,7 +21,7 @@ FineLevel::FineLevel(int cells, int per_cell)
 std::vector<double> FineLevel::build() {
   const int cells = C_ * C_;
   const std::size_t per = static_cast<std::size_t>(F_) * F_;
-  cdf_.assign(func_.size(), 0.0f);
+  assign_fresh(cdf_, func_.size(), 0.0f);
   cell_sum_.assign(static_cast<std::size_t>(cells), 0.0f);
   std::vector<double> sums(static_cast<std::size_t>(cells), 0.0);
   parallel_for(0, cells, [&](int begin, int end) {

@@ -10,6 +10,7 @@
 
 #include "envpis/equal_area.h"
 #include "envpis_assert.h"
+#include "huge_pages.h"
 #include "parallel.h"
 #include "texel_filter.h"
 #include "texel_peak.h"
@@ -32,7 +33,8 @@ struct Setup {
   Setup(const EnvironmentMap& m, const FineLevel& f)
       : map(m), fine(f), w(m.width()), h(m.height()), N(f.resolution()), latlong(m.layout() != MapLayout::EqualArea),
         total(static_cast<std::size_t>(N) * N), table_texel_sr(4.0 * kPi / double(total)),
-        ea_src_sr(4.0 * kPi / (double(w) * h)), lum(static_cast<std::size_t>(w) * h) {
+        ea_src_sr(4.0 * kPi / (double(w) * h)) {
+    assign_fresh(lum, static_cast<std::size_t>(w) * h, 0.0f);
     parallel_for(0, h, [&](int begin, int end) {
       for (int y = begin; y < end; ++y)
         for (int x = 0; x < w; ++x) {
@@ -233,6 +235,7 @@ void splat_accumulate(const Setup& su, const SplatRow& r, int b0, int b1, double
 // parallel over bands of table rows (each thread reads every point and keeps its band's shares).
 std::unique_ptr<double[]> splat(const Setup& su) {
   std::unique_ptr<double[]> out(new double[su.total]);  // uninitialised: zeroed by every thread
+  advise_huge_pages(out.get(), su.total * sizeof(double));
   parallel_fill(out.get(), su.total, 0.0);
   // Azimuth sines and cosines of the map's column centres (lat-long, one split per column).
   std::vector<float> col_cos(su.w), col_sin(su.w);
