@@ -6,8 +6,8 @@
 
 namespace envpis::detail {
 
-FineLevel::FineLevel(int cells, int per_cell)
-    : C_(cells), F_(per_cell), func_(static_cast<std::size_t>(cells) * per_cell * cells * per_cell, 0.0f) {
+FineLevel::FineLevel(int cells, int per_cell) : C_(cells), F_(per_cell) {
+  assign_fresh(func_, static_cast<std::size_t>(cells) * per_cell * cells * per_cell, 0.0f);  // huge_pages.h
   const int N = cells * per_cell;
   row_base_.resize(N);
   col_base_.resize(N);
