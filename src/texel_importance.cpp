@@ -44,13 +44,11 @@ struct Setup {
     });
   }
   float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
-  // Bilinear look-up of the channel average for a world direction, through the same mapping as
-  // EnvironmentMap::eval.
-  float lookup(Vec3 world) const {
-    const Vec3 md = map.to_map(world);
+  // Bilinear look-up of the channel average at map coordinates (u, v) (map_coordinates: the same
+  // mapping as EnvironmentMap::eval).
+  float lookup(float u, float v) const {
     const auto at = [this](int x, int y) { return lum_at(x, y); };
-    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
-    return latlong ? bilinear_latlong(at, w, h, p.x, p.y) : bilinear_equal_area(at, w, p.x, p.y);
+    return latlong ? bilinear_latlong(at, w, h, u, v) : bilinear_equal_area(at, w, u, v);
   }
 };
 
@@ -83,7 +81,7 @@ void gather_combine(const Setup& su, const double* splatted, std::vector<float>&
   const float inv = 1.0f / float(N * s);
   parallel_for(0, N, [&](int row_begin, int row_end) {
     const std::size_t m = static_cast<std::size_t>(N) * s;
-    std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m), gathered(N);
+    std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m), mu(m), mv(m), gathered(N);
     std::vector<std::uint8_t> small(N);
     for (std::size_t i = 0; i < m; ++i) pu[i] = (float(i) + 0.5f) * inv;
     for (int y = row_begin; y < row_end; ++y) {
@@ -91,16 +89,16 @@ void gather_combine(const Setup& su, const double* splatted, std::vector<float>&
       for (int sy = 0; sy < s; ++sy) {
         std::fill(pv.begin(), pv.end(), (float(y * s + sy) + 0.5f) * inv);
         equal_area_square_to_sphere(m, pu.data(), pv.data(), dx.data(), dy.data(), dz.data());
+        map_coordinates(su.map, m, dx.data(), dy.data(), dz.data(), mu.data(), mv.data());  // dz: map space
         for (int x = 0; x < N; ++x) {
           double acc = 0;
           for (int sx = 0; sx < s; ++sx) {
             const std::size_t i = static_cast<std::size_t>(x) * s + sx;
-            acc += su.lookup({dx[i], dy[i], dz[i]});
+            acc += su.lookup(mu[i], mv[i]);
           }
           gathered[x] += static_cast<float>(acc / (double(s) * s));
           if (sy == s / 2) {
-            const std::size_t i = static_cast<std::size_t>(x) * s + s / 2;
-            const float mz = su.map.to_map({dx[i], dy[i], dz[i]}).z;
+            const float mz = dz[static_cast<std::size_t>(x) * s + s / 2];
             small[x] = all_small || 1.0f - mz * mz < small_sin * small_sin;
           }
         }

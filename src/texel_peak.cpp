@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "texel_peak.h"
 
-
-
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -10,9 +8,35 @@
 #include "envpis/equal_area.h"
 #include "parallel.h"
 
+#define ENVPIS_KERNEL_NS scalar
+#include "simd_ops.h"
+
 namespace envpis::detail {
 
 namespace {
+
+using VF = scalar::simd::stdx::native_simd<float>;
+
+// atan2_fast (simd_ops.h) on lanes: the same operations in the same order, so the same bits per lane.
+VF atan2_lanes(VF y, VF x) {
+  using namespace scalar::simd;
+  const VF ax = vabs(x), ay = vabs(y);
+  const VF hi = vmax(ax, ay), lo = vmin(ax, ay);
+  VF a = select(hi > VF(0.0f), atan_unit(lo / hi), VF(0.0f));  // 0 / 0 in the lanes it drops: no trap
+  a = select(ay > ax, VF(1.57079632679489661923f) - a, a);
+  a = select(x < VF(0.0f), VF(3.14159265358979323846f) - a, a);
+  return vcopysign(a, y);
+}
+
+// direction_to_latlong (environment_map.cpp) on lanes, likewise bit for bit.
+void latlong_lanes(VF x, VF y, VF z, VF& u, VF& v) {
+  using scalar::simd::select;
+  VF phi = atan2_lanes(y, x);
+  phi = select(phi < VF(0.0f), phi + VF(2 * kPi), phi);
+  u = phi * VF(0.5f * kInvPi);
+  u = select(u >= VF(1.0f), u - VF(1.0f), u);
+  v = atan2_lanes(scalar::simd::vsqrt(x * x + y * y), z) * VF(kInvPi);
+}
 
 // Range maximum over the columns of each row. Nearly every footprint spans a few columns and is
 // scanned directly in the map's row; a wide one (near a lat-long map's poles) reads maxima of aligned
@@ -81,23 +105,20 @@ bool winds_around_pole(const float* us) {
   return std::fabs(turns) > 0.5f;
 }
 
-// Map coordinates (u, v) and map-space z of points along one horizontal line of the table, with the
-// square's coordinates and directions as scratch (kept between lines: no allocation per line).
+// Map coordinates (u, v) and map-space directions (dx, dy, dz) of points along one horizontal line of
+// the table, with the square's coordinates as scratch (kept between lines: no allocation per line).
 struct Line {
-  std::vector<float> u, v, z, su, sv, dx, dy, dz;
+  std::vector<float> u, v, su, sv, dx, dy, dz;
 };
 
 // `count` points (i * step, y) of the equal-area square, i = 0 .. count - 1, in the map's coordinates.
-void map_line(const EnvironmentMap& map, bool latlong, float y, int count, float step, Line& out) {
-  for (auto* a : {&out.u, &out.v, &out.z, &out.su, &out.sv, &out.dx, &out.dy, &out.dz}) a->resize(count);
+void map_line(const EnvironmentMap& map, float y, int count, float step, Line& out) {
+  for (auto* a : {&out.u, &out.v, &out.su, &out.sv, &out.dx, &out.dy, &out.dz}) a->resize(count);
   for (int i = 0; i < count; ++i) out.su[i] = std::min(1.0f, float(i) * step), out.sv[i] = y;
   equal_area_square_to_sphere(static_cast<std::size_t>(count), out.su.data(), out.sv.data(), out.dx.data(),
                               out.dy.data(), out.dz.data());
-  for (int i = 0; i < count; ++i) {
-    const Vec3 md = map.to_map({out.dx[i], out.dy[i], out.dz[i]});
-    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
-    out.u[i] = p.x, out.v[i] = p.y, out.z[i] = md.z;
-  }
+  map_coordinates(map, static_cast<std::size_t>(count), out.dx.data(), out.dy.data(), out.dz.data(), out.u.data(),
+                  out.v.data());
 }
 
 // Calls visit(x, y, peak) once for every texel of the N x N grid, rows in parallel (each row from one
@@ -117,10 +138,10 @@ void for_each_peak(const EnvironmentMap& map, const std::vector<float>& lum, int
     // Outline points are shared: the corners and horizontal midpoints lie on the lines y and y + 1
     // (2N + 1 points each), the vertical midpoints on the line y + 1/2 (N + 1 points).
     Line top, mid, bottom;
-    map_line(map, latlong, float(row_begin) * inv_n, 2 * N + 1, 0.5f * inv_n, top);
+    map_line(map, float(row_begin) * inv_n, 2 * N + 1, 0.5f * inv_n, top);
     for (int y = row_begin; y < row_end; ++y) {
-      map_line(map, latlong, (float(y) + 0.5f) * inv_n, N + 1, inv_n, mid);
-      map_line(map, latlong, float(y + 1) * inv_n, 2 * N + 1, 0.5f * inv_n, bottom);
+      map_line(map, (float(y) + 0.5f) * inv_n, N + 1, inv_n, mid);
+      map_line(map, float(y + 1) * inv_n, 2 * N + 1, 0.5f * inv_n, bottom);
       for (int x = 0; x < N; ++x) {
         // Around the texel, in kOutline's order.
         const std::pair<const Line*, int> at[kOutline] = {{&top, 2 * x},        {&top, 2 * x + 1}, {&top, 2 * x + 2},
@@ -136,9 +157,9 @@ void for_each_peak(const EnvironmentMap& map, const std::vector<float>& lum, int
           vs[k] = l.v[i];
           vmin = std::min(vmin, l.v[i]);
           vmax = std::max(vmax, l.v[i]);
-          zsum += l.z[i];
-          north = north || l.z[i] > pole_z;
-          south = south || l.z[i] < -pole_z;
+          zsum += l.dz[i];
+          north = north || l.dz[i] > pole_z;
+          south = south || l.dz[i] < -pole_z;
         }
         for (float u : us) umin = std::min(umin, u), umax = std::max(umax, u);
         float peak;
@@ -212,6 +233,29 @@ std::pair<float, float> outline_sag(const float* us, const float* vs, int w, int
   return {su, sv};
 }
 
+
+void map_coordinates(const EnvironmentMap& map, std::size_t n, float* x, float* y, float* z, float* u, float* v) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 md = map.to_map({x[i], y[i], z[i]});
+    x[i] = md.x, y[i] = md.y, z[i] = md.z;
+  }
+  std::size_t i = 0;
+  if (map.layout() != MapLayout::EqualArea) {
+    constexpr std::size_t L = VF::size();
+    for (; i + L <= n; i += L) {
+      VF pu, pv;
+      latlong_lanes(VF(x + i, scalar::simd::stdx::element_aligned), VF(y + i, scalar::simd::stdx::element_aligned),
+                    VF(z + i, scalar::simd::stdx::element_aligned), pu, pv);
+      pu.copy_to(u + i, scalar::simd::stdx::element_aligned);
+      pv.copy_to(v + i, scalar::simd::stdx::element_aligned);
+    }
+  }
+  for (; i < n; ++i) {
+    const Vec3 md{x[i], y[i], z[i]};
+    const Point2 p = map.layout() != MapLayout::EqualArea ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
+    u[i] = p.x, v[i] = p.y;
+  }
+}
 
 std::vector<float> texel_peaks(const EnvironmentMap& map, const std::vector<float>& lum, int N) {
   std::vector<float> peaks(static_cast<std::size_t>(N) * N, 0.0f);
