@@ -266,18 +266,44 @@ std::unique_ptr<double[]> splat(const Setup& su) {
   return out;
 }
 
+// Whether every texel has the same channel average (to within 1e-6); rows in parallel (the minimum and
+// maximum are the same in any order).
 bool map_is_constant(const EnvironmentMap& map) {
-  float lo = std::numeric_limits<float>::max(), hi = 0;
-  for (int y = 0; y < map.height(); ++y)
-    for (int x = 0; x < map.width(); ++x) {
-      const float a = map.texel(x, y).average();
-      lo = std::min(lo, a);
-      hi = std::max(hi, a);
+  std::vector<float> lo(map.height()), hi(map.height());
+  parallel_for(0, map.height(), [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      lo[y] = std::numeric_limits<float>::max(), hi[y] = 0;
+      for (int x = 0; x < map.width(); ++x) {
+        const float a = map.texel(x, y).average();
+        lo[y] = std::min(lo[y], a);
+        hi[y] = std::max(hi[y], a);
+      }
     }
-  return hi - lo <= 1e-6f * hi;
+  });
+  const float l = *std::min_element(lo.begin(), lo.end()), h = *std::max_element(hi.begin(), hi.end());
+  return h - l <= 1e-6f * h;
 }
 
-// The floor (positive density everywhere) or the MIS compensation; returns the integral.
+// v = op(v) for every value, in parallel.
+template <class Op>
+void transform_all(std::vector<float>& func, const Op& op) {
+  constexpr std::size_t kBlock = std::size_t(1) << 16;
+  const int blocks = static_cast<int>((func.size() + kBlock - 1) / kBlock);
+  parallel_for(0, blocks, [&](int begin, int end) {
+    const std::size_t e = std::min(func.size(), std::size_t(end) * kBlock);
+    for (std::size_t i = std::size_t(begin) * kBlock; i < e; ++i) func[i] = op(func[i]);
+  });
+}
+
+// The sum in index order, in double: one thread, so that it is the same number whatever the threads.
+double ordered_sum(const std::vector<float>& func) {
+  double sum = 0;
+  for (float v : func) sum += v;
+  return sum;
+}
+
+// The floor (positive density everywhere) or the MIS compensation; returns the integral. The values
+// change in parallel; the sums stay ordered (ordered_sum).
 double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr, float floor, bool compensated) {
   const double n = double(func.size());
   if (compensated) {
@@ -285,17 +311,14 @@ double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr
     double csum = 0;
     for (float v : func) csum += std::max(0.0f, v - mean);
     if (csum > 0) {
-      for (float& v : func) v = std::max(0.0f, v - mean);
+      transform_all(func, [mean](float v) { return std::max(0.0f, v - mean); });
       return csum * texel_sr;
     }
   }
   const float min_value = static_cast<float>(floor * sum / n);
   if (min_value > 0) {
-    sum = 0;
-    for (float& v : func) {
-      v = std::max(v, min_value);
-      sum += v;
-    }
+    transform_all(func, [min_value](float v) { return std::max(v, min_value); });
+    sum = ordered_sum(func);
   }
   return sum * texel_sr;
 }
@@ -313,8 +336,7 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   if (options.peak_ratio > 0) {
     raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
   }
-  double sum = 0;
-  for (float v : func) sum += v;
+  const double sum = ordered_sum(func);
   if (!(sum > 0) || !std::isfinite(sum)) {
     std::fill(func.begin(), func.end(), 0.0f);
     return 0;
