@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "fine_level.h"
 
+#include "huge_pages.h"
 #include "parallel.h"
 
 namespace envpis::detail {
 
-FineLevel::FineLevel(int cells, int per_cell)
-    : C_(cells), F_(per_cell), func_(static_cast<std::size_t>(cells) * per_cell * cells * per_cell, 0.0f) {
+FineLevel::FineLevel(int cells, int per_cell) : C_(cells), F_(per_cell) {
+  assign_fresh(func_, static_cast<std::size_t>(cells) * per_cell * cells * per_cell, 0.0f);  // huge_pages.h
   const int N = cells * per_cell;
   row_base_.resize(N);
   col_base_.resize(N);
@@ -20,7 +21,7 @@ FineLevel::FineLevel(int cells, int per_cell)
 std::vector<double> FineLevel::build() {
   const int cells = C_ * C_;
   const std::size_t per = static_cast<std::size_t>(F_) * F_;
-  cdf_.assign(func_.size(), 0.0f);
+  assign_fresh(cdf_, func_.size(), 0.0f);
   cell_sum_.assign(static_cast<std::size_t>(cells), 0.0f);
   std::vector<double> sums(static_cast<std::size_t>(cells), 0.0);
   parallel_for(0, cells, [&](int begin, int end) {

@@ -5,10 +5,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "envpis/equal_area.h"
 #include "envpis_assert.h"
+#include "huge_pages.h"
 #include "parallel.h"
 #include "texel_filter.h"
 #include "texel_peak.h"
@@ -31,7 +33,8 @@ struct Setup {
   Setup(const EnvironmentMap& m, const FineLevel& f)
       : map(m), fine(f), w(m.width()), h(m.height()), N(f.resolution()), latlong(m.layout() != MapLayout::EqualArea),
         total(static_cast<std::size_t>(N) * N), table_texel_sr(4.0 * kPi / double(total)),
-        ea_src_sr(4.0 * kPi / (double(w) * h)), lum(static_cast<std::size_t>(w) * h) {
+        ea_src_sr(4.0 * kPi / (double(w) * h)) {
+    assign_fresh(lum, static_cast<std::size_t>(w) * h, 0.0f);
     parallel_for(0, h, [&](int begin, int end) {
       for (int y = begin; y < end; ++y)
         for (int x = 0; x < w; ++x) {
@@ -41,55 +44,68 @@ struct Setup {
     });
   }
   float lum_at(int x, int y) const { return lum[static_cast<std::size_t>(y) * w + x]; }
-  // Bilinear look-up of the channel average for a world direction, through the same mapping as
-  // EnvironmentMap::eval.
-  float lookup(Vec3 world) const {
-    const Vec3 md = map.to_map(world);
+  // Bilinear look-up of the channel average at map coordinates (u, v) (map_coordinates: the same
+  // mapping as EnvironmentMap::eval).
+  float lookup(float u, float v) const {
     const auto at = [this](int x, int y) { return lum_at(x, y); };
-    const Point2 p = latlong ? direction_to_latlong(md) : equal_area_sphere_to_square(md);
-    return latlong ? bilinear_latlong(at, w, h, p.x, p.y) : bilinear_equal_area(at, w, p.x, p.y);
+    return latlong ? bilinear_latlong(at, w, h, u, v) : bilinear_equal_area(at, w, u, v);
   }
 };
 
+// The gather's s x s look-ups per table texel: about one per map texel.
+int gather_strata(const Setup& su) {
+  const double ratio = double(su.w) * su.h / double(su.total);
+  return std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio) - 0.25)), 1, 8);
+}
+
+// 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
+// (so a texel that sees light by either route keeps a positive density).
+float combine(double splatted, double texel_sr, float gathered, bool small) {
+  const double sp = splatted / texel_sr, ga = gathered;
+  const double v = small ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
+  return static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
+}
+
 // 1. Gather: the average of s x s stratified bilinear look-ups over each table texel. Accurate where
 // map texels are at least about as large as table texels. Also marks the texels where map texels are
-// smaller than half a table texel (`small`).
-void gather(const Setup& su, std::vector<float>& out, std::vector<std::uint8_t>& small) {
+// smaller than half a table texel (`small`), and combines each finished row with the splat (step 3)
+// straight into `func`: the gathered values and marks live in one row's buffers, not in N^2 arrays.
+void gather_combine(const Setup& su, const double* splatted, std::vector<float>& func) {
   const int N = su.N;
   // A lat-long texel at polar angle theta is smaller than half a table texel when sin(theta) is below
   // this (its solid angle is about (2 pi / w)(pi / h) sin theta).
   const float small_sin =
       su.latlong ? static_cast<float>(0.5 * su.table_texel_sr / ((2.0 * kPi / su.w) * (kPi / su.h))) : 0.0f;
   const bool all_small = !su.latlong && su.ea_src_sr < 0.5 * su.table_texel_sr;
-  const double ratio = double(su.w) * su.h / double(su.total);
-  const int s = std::clamp(static_cast<int>(std::ceil(std::sqrt(ratio) - 0.25)), 1, 8);
-  out.assign(su.total, 0.0f);
-  small.assign(su.total, 0);
+  const int s = gather_strata(su);
   const float inv = 1.0f / float(N * s);
   parallel_for(0, N, [&](int row_begin, int row_end) {
     const std::size_t m = static_cast<std::size_t>(N) * s;
-    std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m);
+    std::vector<float> pu(m), pv(m), dx(m), dy(m), dz(m), mu(m), mv(m), gathered(N);
+    std::vector<std::uint8_t> small(N);
+    for (std::size_t i = 0; i < m; ++i) pu[i] = (float(i) + 0.5f) * inv;
     for (int y = row_begin; y < row_end; ++y) {
+      std::fill(gathered.begin(), gathered.end(), 0.0f);  // summed in float, stratum row by row
       for (int sy = 0; sy < s; ++sy) {
-        const float v = (float(y * s + sy) + 0.5f) * inv;
-        for (std::size_t i = 0; i < m; ++i) {
-          pu[i] = (float(i) + 0.5f) * inv;
-          pv[i] = v;
-        }
+        std::fill(pv.begin(), pv.end(), (float(y * s + sy) + 0.5f) * inv);
         equal_area_square_to_sphere(m, pu.data(), pv.data(), dx.data(), dy.data(), dz.data());
+        map_coordinates(su.map, m, dx.data(), dy.data(), dz.data(), mu.data(), mv.data());  // dz: map space
         for (int x = 0; x < N; ++x) {
           double acc = 0;
           for (int sx = 0; sx < s; ++sx) {
             const std::size_t i = static_cast<std::size_t>(x) * s + sx;
-            acc += su.lookup({dx[i], dy[i], dz[i]});
+            acc += su.lookup(mu[i], mv[i]);
           }
-          out[su.fine.index(x, y)] += static_cast<float>(acc / (double(s) * s));
+          gathered[x] += static_cast<float>(acc / (double(s) * s));
           if (sy == s / 2) {
-            const std::size_t i = static_cast<std::size_t>(x) * s + s / 2;
-            const float mz = su.map.to_map({dx[i], dy[i], dz[i]}).z;
-            small[su.fine.index(x, y)] = all_small || 1.0f - mz * mz < small_sin * small_sin;
+            const float mz = dz[static_cast<std::size_t>(x) * s + s / 2];
+            small[x] = all_small || 1.0f - mz * mz < small_sin * small_sin;
           }
         }
+      }
+      for (int x = 0; x < N; ++x) {
+        const std::size_t i = su.fine.index(x, y);
+        func[i] = combine(splatted[i], su.table_texel_sr, gathered[x], small[x]);
       }
     }
   });
@@ -126,12 +142,14 @@ SplitColumns split_columns(int w, int kx) {
   SplitColumns c;
   c.cos_phi.resize(static_cast<std::size_t>(w) * kx);
   c.sin_phi.resize(c.cos_phi.size());
-  for (int x = 0; x < w; ++x)
-    for (int i = 0; i < kx; ++i) {
-      const Vec3 d = latlong_to_direction({float((x + (i + 0.5) / kx) / w), 0.5f});
-      c.cos_phi[static_cast<std::size_t>(x) * kx + i] = d.x;
-      c.sin_phi[static_cast<std::size_t>(x) * kx + i] = d.y;
-    }
+  parallel_for(0, w, [&](int begin, int end) {
+    for (int x = begin; x < end; ++x)
+      for (int i = 0; i < kx; ++i) {
+        const Vec3 d = latlong_to_direction({float((x + (i + 0.5) / kx) / w), 0.5f});
+        c.cos_phi[static_cast<std::size_t>(x) * kx + i] = d.x;
+        c.sin_phi[static_cast<std::size_t>(x) * kx + i] = d.y;
+      }
+  });
   return c;
 }
 
@@ -175,8 +193,10 @@ void splat_row(const Setup& su, int y, const std::vector<float>& col_cos, const 
   equal_area_sphere_to_square(m, mx.data(), my.data(), mz.data(), out.u.data(), out.v.data());
 }
 
-// Spreads a row's points with bilinear (tent) weights over the 2 x 2 table texels around each.
-void splat_accumulate(const Setup& su, const SplatRow& r, std::vector<double>& out) {
+// Spreads a row's points with bilinear (tent) weights over the 2 x 2 table texels around each, adding
+// only to table rows [b0, b1): threads that own disjoint bands of rows add every point's share in the
+// same order as one thread would, so each texel's double sum is the same, bit for bit.
+void splat_accumulate(const Setup& su, const SplatRow& r, int b0, int b1, double* out) {
   const int N = su.N;
   for (std::size_t k = 0; k < r.e.size(); ++k) {
     if (!(r.e[k] > 0)) continue;
@@ -186,16 +206,20 @@ void splat_accumulate(const Setup& su, const SplatRow& r, std::vector<double>& o
     const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
     const double e = r.e[k];
     if (x0 >= 0 && y0 >= 0 && x0 + 1 < N && y0 + 1 < N) {  // interior: no wrapping
-      out[su.fine.index(x0, y0)] += e * ((1 - tx) * (1 - ty));
-      out[su.fine.index(x0 + 1, y0)] += e * (tx * (1 - ty));
-      out[su.fine.index(x0, y0 + 1)] += e * ((1 - tx) * ty);
-      out[su.fine.index(x0 + 1, y0 + 1)] += e * (tx * ty);
+      if (y0 >= b0 && y0 < b1) {
+        out[su.fine.index(x0, y0)] += e * ((1 - tx) * (1 - ty));
+        out[su.fine.index(x0 + 1, y0)] += e * (tx * (1 - ty));
+      }
+      if (y0 + 1 >= b0 && y0 + 1 < b1) {
+        out[su.fine.index(x0, y0 + 1)] += e * ((1 - tx) * ty);
+        out[su.fine.index(x0 + 1, y0 + 1)] += e * (tx * ty);
+      }
       continue;
     }
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) {
         int xi = x0 + i, yi = y0 + j;
-        if (!equal_area_wrap(N, xi, yi)) continue;
+        if (!equal_area_wrap(N, xi, yi) || yi < b0 || yi >= b1) continue;
         out[su.fine.index(xi, yi)] += e * ((i ? tx : 1 - tx) * (j ? ty : 1 - ty));
       }
   }
@@ -205,9 +229,12 @@ void splat_accumulate(const Setup& su, const SplatRow& r, std::vector<double>& o
 // its centre. Energy-conserving where map texels are smaller than table texels (near a lat-long map's
 // poles), where point look-ups would miss a small bright texel or over-count it. A map texel taller or
 // wider than half a table texel is split into sub-texels first (each with its exact solid angle), so
-// the splat stays smooth. Rows are processed in chunks: parallel mapping, serial accumulation.
-std::vector<double> splat(const Setup& su) {
-  std::vector<double> out(su.total, 0.0);
+// the splat stays smooth. Rows are processed in chunks: parallel mapping, then the accumulation in
+// parallel over bands of table rows (each thread reads every point and keeps its band's shares).
+std::unique_ptr<double[]> splat(const Setup& su) {
+  std::unique_ptr<double[]> out(new double[su.total]);  // uninitialised: zeroed by every thread
+  advise_huge_pages(out.get(), su.total * sizeof(double));
+  parallel_fill(out.get(), su.total, 0.0);
   // Azimuth sines and cosines of the map's column centres (lat-long, one split per column).
   std::vector<float> col_cos(su.w), col_sin(su.w);
   for (int x = 0; x < su.w; ++x) {
@@ -223,6 +250,7 @@ std::vector<double> splat(const Setup& su) {
     if (kx > 1 && split[kx].cos_phi.empty()) split[kx] = split_columns(su.w, kx);
   }
   const int chunk = std::max(1, std::min(su.h, (1 << 18) / su.w));
+  const int bands = std::min(su.N, parallel_threads());
   std::vector<SplatRow> rows(chunk);
   for (int y0 = 0; y0 < su.h; y0 += chunk) {
     const int y1 = std::min(su.h, y0 + chunk);
@@ -230,23 +258,52 @@ std::vector<double> splat(const Setup& su) {
       std::vector<float> mx, my, mz;
       for (int y = row_begin; y < row_end; ++y) splat_row(su, y, col_cos, col_sin, split, rows[y - y0], mx, my, mz);
     });
-    for (int y = y0; y < y1; ++y) splat_accumulate(su, rows[y - y0], out);
+    parallel_for(0, bands, [&](int band_begin, int band_end) {
+      const int b0 = int(std::int64_t(su.N) * band_begin / bands), b1 = int(std::int64_t(su.N) * band_end / bands);
+      for (int y = y0; y < y1; ++y) splat_accumulate(su, rows[y - y0], b0, b1, out.get());
+    });
   }
   return out;
 }
 
+// Whether every texel has the same channel average (to within 1e-6); rows in parallel (the minimum and
+// maximum are the same in any order).
 bool map_is_constant(const EnvironmentMap& map) {
-  float lo = std::numeric_limits<float>::max(), hi = 0;
-  for (int y = 0; y < map.height(); ++y)
-    for (int x = 0; x < map.width(); ++x) {
-      const float a = map.texel(x, y).average();
-      lo = std::min(lo, a);
-      hi = std::max(hi, a);
+  std::vector<float> lo(map.height()), hi(map.height());
+  parallel_for(0, map.height(), [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      lo[y] = std::numeric_limits<float>::max(), hi[y] = 0;
+      for (int x = 0; x < map.width(); ++x) {
+        const float a = map.texel(x, y).average();
+        lo[y] = std::min(lo[y], a);
+        hi[y] = std::max(hi[y], a);
+      }
     }
-  return hi - lo <= 1e-6f * hi;
+  });
+  const float l = *std::min_element(lo.begin(), lo.end()), h = *std::max_element(hi.begin(), hi.end());
+  return h - l <= 1e-6f * h;
 }
 
-// The floor (positive density everywhere) or the MIS compensation; returns the integral.
+// v = op(v) for every value, in parallel.
+template <class Op>
+void transform_all(std::vector<float>& func, const Op& op) {
+  constexpr std::size_t kBlock = std::size_t(1) << 16;
+  const int blocks = static_cast<int>((func.size() + kBlock - 1) / kBlock);
+  parallel_for(0, blocks, [&](int begin, int end) {
+    const std::size_t e = std::min(func.size(), std::size_t(end) * kBlock);
+    for (std::size_t i = std::size_t(begin) * kBlock; i < e; ++i) func[i] = op(func[i]);
+  });
+}
+
+// The sum in index order, in double: one thread, so that it is the same number whatever the threads.
+double ordered_sum(const std::vector<float>& func) {
+  double sum = 0;
+  for (float v : func) sum += v;
+  return sum;
+}
+
+// The floor (positive density everywhere) or the MIS compensation; returns the integral. The values
+// change in parallel; the sums stay ordered (ordered_sum).
 double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr, float floor, bool compensated) {
   const double n = double(func.size());
   if (compensated) {
@@ -254,17 +311,14 @@ double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr
     double csum = 0;
     for (float v : func) csum += std::max(0.0f, v - mean);
     if (csum > 0) {
-      for (float& v : func) v = std::max(0.0f, v - mean);
+      transform_all(func, [mean](float v) { return std::max(0.0f, v - mean); });
       return csum * texel_sr;
     }
   }
   const float min_value = static_cast<float>(floor * sum / n);
   if (min_value > 0) {
-    sum = 0;
-    for (float& v : func) {
-      v = std::max(v, min_value);
-      sum += v;
-    }
+    transform_all(func, [min_value](float v) { return std::max(v, min_value); });
+    sum = ordered_sum(func);
   }
   return sum * texel_sr;
 }
@@ -273,28 +327,16 @@ double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr
 
 double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options) {
   const Setup su(map, fine);
-  std::vector<float> gathered;
-  std::vector<std::uint8_t> small;
-  gather(su, gathered, small);
-  const std::vector<double> splatted = splat(su);
-  // 3. Combine: splat where map texels are small, gather elsewhere; either one where the other is 0
-  // (so a texel that sees light by either route keeps a positive density).
-  // Every texel is written (FineLevel sized and zeroed the array): no second fill.
   std::vector<float>& func = fine.values();
   ENVPIS_ASSERT(func.size() == su.total);
-  parallel_for(0, su.N, [&](int row_begin, int row_end) {
-    for (std::size_t i = std::size_t(row_begin) * su.N; i < std::size_t(row_end) * su.N; ++i) {
-      const double sp = splatted[i] / su.table_texel_sr, ga = gathered[i];
-      const double v = small[i] ? (sp > 0 ? sp : ga) : (ga > 0 ? ga : sp);
-      func[i] = static_cast<float>(std::min<double>(v, std::numeric_limits<float>::max()));
-    }
-  });
+  // Every texel is written (FineLevel sized and zeroed the array): no second fill. The splat first,
+  // so that the gather combines each row as it finishes it; its N^2 doubles are freed right after.
+  gather_combine(su, splat(su).get(), func);
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
   if (options.peak_ratio > 0) {
     raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
   }
-  double sum = 0;
-  for (float v : func) sum += v;
+  const double sum = ordered_sum(func);
   if (!(sum > 0) || !std::isfinite(sum)) {
     std::fill(func.begin(), func.end(), 0.0f);
     return 0;

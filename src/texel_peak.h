@@ -15,6 +15,7 @@
 // parallel, each mapping its outline points once.
 #pragma once
 
+#include <cstddef>
 #include <utility>
 #include <vector>
 
@@ -38,6 +39,12 @@ void footprint(float a, float b, bool nearest, float sag, int& lo, int& hi);
 /// The outline's largest sagitta along u and along v, in pixels: for each of the 4 edges, the
 /// midpoint's distance from the corners' mean. Azimuth differences (turns) are taken across the seam.
 std::pair<float, float> outline_sag(const float* us, const float* vs, int w, int h);
+
+/// The map coordinates (u, v) of n world directions (x, y, z), which are replaced by their map-space
+/// directions (EnvironmentMap::to_map): direction_to_latlong or equal_area_sphere_to_square of those,
+/// bit for bit, the lat-long conversion a few lanes at a time (the gather and the bound read the map
+/// through it).
+void map_coordinates(const EnvironmentMap& map, std::size_t n, float* x, float* y, float* z, float* u, float* v);
 
 /// `lum` holds the map's per-texel importance (channel average), row-major, width * height.
 /// Returns N * N peaks, row-major over the equal-area square (y down).
