@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Cycles side by side with envpis on matched sphere scenes (issue 11, item 5; docs/cycles.md).
+"""Cycles side by side with envpis on matched sphere scenes (issue 11, item 5; issue 21, item 4; docs/cycles.md).
 
 Run it through scripts/cycles-compare.sh, which finds or installs Blender and the tools. For each map and
 roughness it renders the same scene in both renderers, a high-spp reference per renderer, and measures
@@ -8,7 +8,9 @@ every render against its own renderer's reference:
 
   relMSE = mean over pixels of (mean over R, G, B of (I - R)^2 / (R^2 + 0.01))   (apps/envpis/metrics.h)
 
-over the sphere's pixels (pixel centre on the sphere) and over all pixels, the median over the seeds.
+over the sphere's pixels (pixel centre on the sphere) and over all pixels, the median over the seeds; also
+by quartile of reference brightness, the log-log slope from 16 to 256 spp and the tail (worst pixel,
+pixels 10x off). The metrics and the markdown tables are in scripts/cycles_metrics.py.
 Sampling seconds: envpis's "wall seconds" of the sampling loop (tables apart); Cycles' render_time that
 Blender writes into the EXR header (synchronisation, which includes building the world's importance
 map, apart). Efficiency = 1 / (relMSE x seconds). The converged references of the two renderers are
@@ -20,7 +22,6 @@ scripts/cycles_scene.py.
 """
 import argparse
 import json
-import math
 import os
 import re
 import subprocess
@@ -32,12 +33,13 @@ try:
 except ImportError:
     sys.exit("cycles_compare.py: error: numpy is missing (Debian: apt-get install python3-numpy)")
 
+import cycles_metrics as M  # noqa: E402  (the metrics and tables, pure functions; beside this file)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 STUDIOLIGHTS = "/usr/share/blender/datafiles/studiolights/world"
 REF_SEED = 1000003           # the references' seed: none of the measured seeds 0 .. --seeds - 1
-ORTHO_HEIGHT = 2.2           # film height in world units: the unit sphere fills 1/1.1 of it
-REL_EPSILON = 0.01           # apps/envpis/metrics.h kRelEpsilon
+ORTHO_HEIGHT = M.ORTHO_HEIGHT
 STRATEGIES = ("bsdf", "env", "mis", "mis-comp", "product", "oracle")
 
 
@@ -69,15 +71,17 @@ def parse_args(argv):
                                 description="Cycles vs envpis on matched sphere scenes (docs/cycles.md)",
                epilog="cycles-compare.sh also takes --install (or CYCLES_INSTALL=1): apt-get install blender "
                       "when it is missing.")
-    p.add_argument("--maps", default="sunrise,studio",
-                   help="comma-separated maps: a name in %s, or a path to a 2:1 lat-long EXR" % STUDIOLIGHTS)
+    p.add_argument("--maps", default="sunrise,studio,courtyard",
+                   help="comma-separated maps: a name in %s, or a path to a 2:1 lat-long EXR (default "
+                        "sunrise,studio,courtyard: two with a sun or small bright lights, one without)" % STUDIOLIGHTS)
     p.add_argument("--roughness", default="0.2,0.5",
                    help="Cycles roughness values; envpis's GGX alpha is their square (default 0.2,0.5)")
     p.add_argument("--size", type=int, default=256, help="image side in pixels (default 256)")
     p.add_argument("--spp", default="1,4,16,64,256", help="measured samples per pixel, ascending")
     p.add_argument("--seeds", type=int, default=3, help="renders per spp, seeds 0 .. K-1 (default 3)")
     p.add_argument("--ref-spp", type=int, default=4096, help="samples per pixel of each reference (default 4096)")
-    p.add_argument("--strategies", default="mis,mis-comp,product", help="envpis strategies")
+    p.add_argument("--strategies", default="bsdf,mis,mis-comp,product",
+                   help="envpis strategies (default bsdf,mis,mis-comp,product)")
     p.add_argument("--sampler", default="sobol", help="envpis --sampler (default sobol)")
     p.add_argument("--ref-strategy", default="mis", help="envpis reference strategy (default mis)")
     p.add_argument("--pattern", default="PROGRESSIVE_MULTI_JITTER", choices=("PROGRESSIVE_MULTI_JITTER", "SOBOL"),
@@ -177,36 +181,6 @@ def blender_seconds(header, path):
     return seconds
 
 
-# ---- metrics ----
-
-def sphere_mask(size):
-    """Pixels whose centre sees the unit sphere through the orthographic camera (envpis's object-id)."""
-    c = (np.arange(size) + 0.5) / size * ORTHO_HEIGHT - ORTHO_HEIGHT / 2
-    x, y = np.meshgrid(c, c)
-    return x * x + y * y < 1.0
-
-
-def rel_sq_error(image, ref):
-    return np.mean((image - ref) ** 2 / (ref * ref + REL_EPSILON), axis=2)
-
-
-def relmse(image, ref, mask):
-    e = rel_sq_error(image, ref)
-    return float(e[mask].mean()), float(e.mean())
-
-
-def agreement(cycles_ref, envpis_ref, mask):
-    """How far apart the two converged references are on the sphere."""
-    c, e = cycles_ref[mask], envpis_ref[mask]
-    return {
-        "mean_relative_difference": float(np.mean(np.abs(c - e) / (np.abs(e) + REL_EPSILON))),
-        "ratio_of_means": float(c.mean() / e.mean()),
-        "relmse_cycles_vs_envpis": float(np.mean(np.mean((c - e) ** 2 / (e * e + REL_EPSILON), axis=1))),
-        "p95_relative_difference": float(np.percentile(np.mean(np.abs(c - e), axis=1) /
-                                                       (np.mean(np.abs(e), axis=1) + REL_EPSILON), 95)),
-    }
-
-
 # ---- renders ----
 
 def scene_json(path, size, alpha):
@@ -253,18 +227,27 @@ def cycles_renders(a, env, roughness, jobs):
     run(cmd, "blender (Cycles)")
 
 
-def median(values):
-    return float(np.median(values))
+def loadavg():
+    """The 1-minute load average (the machine is shared: timings are only as good as it was quiet)."""
+    try:
+        with open("/proc/loadavg") as f:
+            return float(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 def measure_scene(a, env, roughness):
     alpha = roughness * roughness
-    name = "%s-r%g" % (os.path.splitext(os.path.basename(env))[0], roughness)
+    map_name = os.path.splitext(os.path.basename(env))[0]
+    name = "%s-r%g" % (map_name, roughness)
     d = os.path.join(a.out, name)
     os.makedirs(d, exist_ok=True)
-    mask = sphere_mask(a.size)
+    mask = M.sphere_mask(a.size)
     seeds = list(range(a.seeds))
-    result = {"name": name, "map": env, "cycles_roughness": roughness, "alpha": alpha, "renderers": {}}
+    result = {"name": name, "map": env, "map_name": map_name, "cycles_roughness": roughness, "alpha": alpha,
+              "renderers": {}}
+    start = time.time()
+    result["loadavg_before"] = loadavg()
 
     # Cycles: the reference and every measured render in one Blender run.
     t0 = time.time()
@@ -273,8 +256,8 @@ def measure_scene(a, env, roughness):
     jobs += [(s, k, os.path.join(d, "cycles-%d-%d.exr" % (s, k))) for s in a.spp for k in seeds]
     log("%s: Cycles, %d renders" % (name, len(jobs)))
     cycles_renders(a, env, roughness, jobs)
-    renders = {"cycles": {(s, k): p for s, k, p in jobs[1:]}}
-    refs = {"cycles": cref}
+    renders = {M.CYCLES: {(s, k): p for s, k, p in jobs[1:]}}
+    refs = {M.CYCLES: cref}
     log("%s: Cycles done in %.0f s" % (name, time.time() - t0))
 
     # envpis: each strategy at each spp and seed, and its own reference.
@@ -294,99 +277,33 @@ def measure_scene(a, env, roughness):
                 seconds[(key, s, k)] = envpis_render(a, scene, env, strategy, s, k, out)
                 renders[key][(s, k)] = out
     log("%s: envpis done in %.0f s" % (name, time.time() - t0))
+    result["render_seconds"] = time.time() - start
 
-    # Measure every render against its own renderer's reference.
-    ref_images = {}
+    # Measure every render against its own renderer's reference. The brightness quartiles are one
+    # partition of the sphere's pixels for both renderers: by the mean over channels of the mean of the
+    # two references (they agree to under 1%, see "agreement").
+    ref_images = {cref: read_exr(cref)[0], eref: read_exr(eref)[0]}
+    c_ref, e_ref = ref_images[cref], ref_images[eref]
+    quartile = M.brightness_quartiles(((c_ref + e_ref) / 2).mean(axis=2)[mask])
     for key in renders:
-        if refs[key] not in ref_images:
-            ref_images[refs[key]] = read_exr(refs[key])[0]
         ref = ref_images[refs[key]]
         rows = []
         for s in a.spp:
             per_seed = []
             for k in seeds:
                 image, header = read_exr(renders[key][(s, k)])
-                sec = blender_seconds(header, renders[key][(s, k)]) if key == "cycles" else seconds[(key, s, k)]
-                sphere, whole = relmse(image, ref, mask)
-                per_seed.append({"seed": k, "seconds": sec, "relmse_sphere": sphere, "relmse_all": whole})
-            rows.append({"spp": s, "seeds": per_seed,
-                         "relmse_sphere": median([r["relmse_sphere"] for r in per_seed]),
-                         "relmse_all": median([r["relmse_all"] for r in per_seed]),
-                         "seconds": median([r["seconds"] for r in per_seed])})
-        # Seconds per spp from the largest spp (the most samples: the least timer and start-up noise, and
-        # Blender's render_time has 10 ms steps), the fastest seed (other processes only ever slow a
-        # render down; envpis compare also keeps the minimum of its timing repeats). Efficiency at any
-        # spp uses spp x this rate.
-        rate = min(r["seconds"] for r in rows[-1]["seeds"]) / rows[-1]["spp"]
-        for r in rows:  # None when a time rounds to 0 (Blender's 10 ms steps on a tiny image) or relMSE is 0
-            r["efficiency_sphere"] = 1.0 / (r["relmse_sphere"] * r["spp"] * rate) \
-                if r["relmse_sphere"] > 0 and rate > 0 else None
-            r["efficiency_all"] = 1.0 / (r["relmse_all"] * r["spp"] * rate) if r["relmse_all"] > 0 and rate > 0 else None
-        slope = None
-        if len(rows) >= 2 and rows[-1]["relmse_sphere"] > 0 and rows[-2]["relmse_sphere"] > 0:
-            slope = math.log(rows[-1]["relmse_sphere"] / rows[-2]["relmse_sphere"]) / \
-                math.log(rows[-1]["spp"] / rows[-2]["spp"])
-        result["renderers"][key] = {"reference": refs[key], "seconds_per_spp": rate, "slope_sphere": slope,
-                                    "spp": rows}
-    c_ref, e_ref = ref_images[cref], ref_images[eref]
-    result["agreement"] = agreement(c_ref, e_ref, mask)
+                sec = blender_seconds(header, renders[key][(s, k)]) if key == M.CYCLES else seconds[(key, s, k)]
+                m = M.image_metrics(image, ref, mask, quartile)
+                m.update(seed=k, seconds=sec)
+                per_seed.append(m)
+            rows.append({"spp": s, "seeds": per_seed})
+        result["renderers"][key] = dict(reference=refs[key], **M.summarise(rows))
+    result["agreement"] = M.agreement(c_ref, e_ref, mask)
     result["sphere_pixels"] = int(mask.sum())
+    result["seconds"] = time.time() - start
+    result["loadavg_after"] = loadavg()
+    log("%s: measured; %.0f s in all" % (name, result["seconds"]))
     return result
-
-
-# ---- report ----
-
-def fmt(v, spec=".3g"):
-    return "-" if v is None else format(v, spec)
-
-
-def markdown(a, results, loaded_note):
-    lines = ["# Cycles vs envpis, matched sphere scenes", ""]
-    lines.append("%dx%d, orthographic, direct light, %d threads; envpis `--sampler %s --env-filter nearest`, "
-                 "Cycles %s; references: Cycles and envpis %s at %d spp; relMSE medians over %d seed(s), "
-                 "each renderer against its own reference. %s"
-                 % (a.size, a.size, a.threads, a.sampler, a.pattern, a.ref_strategy, a.ref_spp, a.seeds, loaded_note))
-    lines.append("")
-    top = a.spp[-1]
-    for res in results:
-        ag = res["agreement"]
-        lines.append("## %s, Cycles roughness %g (alpha %g)" % (os.path.basename(res["map"]), res["cycles_roughness"],
-                                                                 res["alpha"]))
-        lines.append("")
-        lines.append("Converged references, Cycles vs envpis on the sphere: mean relative difference %.4f, "
-                     "ratio of means %.4f, 95th percentile %.4f." % (ag["mean_relative_difference"],
-                                                                   ag["ratio_of_means"], ag["p95_relative_difference"]))
-        lines.append("")
-        head = "| renderer | " + " | ".join("relMSE %d spp" % s for s in a.spp) + \
-            " | slope %d-%d | ms/spp | relMSE all px %d spp | relMSE Cycles / this at %d spp " \
-            "| efficiency vs Cycles, sphere (all px) at %d spp |" \
-            % (a.spp[-2] if len(a.spp) > 1 else top, top, top, top, top)
-        lines += [head, "|" + "---|" * (len(a.spp) + 6)]
-        cyc = res["renderers"]["cycles"]["spp"][-1]
-        for key, r in res["renderers"].items():
-            last = r["spp"][-1]
-            ratio = lambda k: (last[k] / cyc[k]) if last[k] and cyc[k] else None
-            # The equal-spp relMSE ratio needs no timing, so a busy machine does not change it.
-            spp_ratio = cyc["relmse_sphere"] / last["relmse_sphere"] if last["relmse_sphere"] else None
-            lines.append("| %s | %s | %s | %.2f | %s | %s | %s (%s) |" % (
-                key, " | ".join(fmt(x["relmse_sphere"]) for x in r["spp"]), fmt(r["slope_sphere"], ".2f"),
-                1000 * r["seconds_per_spp"], fmt(last["relmse_all"]), fmt(spp_ratio, ".2f"),
-                fmt(ratio("efficiency_sphere"), ".2f"), fmt(ratio("efficiency_all"), ".2f")))
-        lines.append("")
-        # The ratio at every spp: stratified samples make it depend on the spp.
-        lines += ["| efficiency vs Cycles, sphere | " + " | ".join("%d spp" % s for s in a.spp) + " |",
-                  "|" + "---|" * (len(a.spp) + 1)]
-        cycles_rows = res["renderers"]["cycles"]["spp"]
-        for key, r in res["renderers"].items():
-            if key == "cycles":
-                continue
-            cells = []
-            for mine, theirs in zip(r["spp"], cycles_rows):
-                ok = mine["efficiency_sphere"] and theirs["efficiency_sphere"]
-                cells.append(fmt(mine["efficiency_sphere"] / theirs["efficiency_sphere"] if ok else None, ".2f"))
-            lines.append("| %s | %s |" % (key, " | ".join(cells)))
-        lines.append("")
-    return "\n".join(lines) + "\n"
 
 
 def main(argv):
@@ -394,24 +311,34 @@ def main(argv):
         a = parse_args(argv)
         os.makedirs(a.out, exist_ok=True)
         start = time.time()
-        with open("/proc/loadavg") as f:
-            load_before = f.read().split()[0]
+        load_before = loadavg()
         results = [measure_scene(a, env, r) for env in a.maps for r in a.roughness]
-        with open("/proc/loadavg") as f:
-            load_after = f.read().split()[0]
-        note = "Load average %s before and %s after the run (%d cores)." % (load_before, load_after,
-                                                                         os.cpu_count() or 0)
+        load_after = loadavg()
+        loads = [x for x in [load_before, load_after] + [r[k] for r in results
+                                                          for k in ("loadavg_before", "loadavg_after")] if x is not None]
+        note = "%d cores; 1-minute load average %s to %s during the run%s." % (
+            os.cpu_count() or 0, M.fmt(min(loads) if loads else None, ".1f"),
+            M.fmt(max(loads) if loads else None, ".1f"),
+            " (timings, hence efficiency, are indicative only when it exceeds the cores; relMSE is not affected)"
+            if loads and max(loads) > (os.cpu_count() or 1) else "")
         summary = {"command": ["scripts/cycles-compare.sh"] + argv, "size": a.size, "spp": a.spp, "seeds": a.seeds,
                    "ref_spp": a.ref_spp, "threads": a.threads, "envpis_sampler": a.sampler,
                    "cycles_pattern": a.pattern, "ortho_height": ORTHO_HEIGHT, "loadavg": [load_before, load_after],
-                   "relmse_definition": "mean over pixels of mean over RGB of (I-R)^2/(R^2+0.01), R = the renderer's "
-                                        "own reference; median over seeds",
+                   "relmse_definition": "mean over the sphere's pixels of mean over RGB of (I-R)^2/(R^2+0.01), R = "
+                                        "the renderer's own reference; median over seeds",
+                   "quartile_definition": "quarters of the sphere's pixels ranked by the channel mean of the mean "
+                                          "of the two references; quartiles[3] is the brightest",
+                   "tail_definition": "worst: the largest per-pixel error on the sphere; over_10x: pixels with "
+                                      "error > 100; medians over seeds",
+                   "slope_definition": "least-squares slope of log relMSE on log spp over the spp in [16, 256]",
                    "efficiency_definition": "1/(relMSE x spp x seconds_per_spp), seconds_per_spp from the fastest seed "
                                             "at the largest spp",
                    "scenes": results, "wall_seconds": time.time() - start}
         with open(os.path.join(a.out, "results.json"), "w") as f:
             json.dump(summary, f, indent=1)
-        md = markdown(a, results, note)
+        settings = {k: getattr(a, k) for k in ("size", "threads", "sampler", "pattern", "ref_strategy", "ref_spp",
+                                               "seeds", "spp")}
+        md = M.markdown(settings, results, note)
         with open(os.path.join(a.out, "results.md"), "w") as f:
             f.write(md)
         print(md)
