@@ -3,7 +3,8 @@
 // and a 4096x2048 map (sunset.exr resampled in setup, not timed), a synthetic sky with a small sun at
 // 4096x2048 and 8192x4096 (generated in setup, not timed; issue 21's build targets), with 1 and 2 TBB threads
 // (tbb::global_control), with the peak bound off (peak_ratio 0) and at its default (8). Wall-clock
-// time (UseRealTime). Counters report the table's memory against a
+// time (UseRealTime). TableBuildMapTexels_*: the renderer's default table (the map's own texels,
+// 4 x 4 sub-cells, FineTexels::Map). Counters report the table's memory against a
 // standard single-level 2D CDF over the same texels.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -17,7 +18,7 @@ namespace {
 
 using namespace envpis;
 
-void table_build(benchmark::State& state, const EnvironmentMap& (*map_fn)()) {
+void table_build(benchmark::State& state, const EnvironmentMap& (*map_fn)(), FineTexels fine_texels = FineTexels::EqualArea) {
   const EnvironmentMap& map = map_fn();  // loaded / resampled once, outside the timing
   const int threads = static_cast<int>(state.range(0));
   tbb::global_control gc(tbb::global_control::max_allowed_parallelism, threads);
@@ -26,6 +27,8 @@ void table_build(benchmark::State& state, const EnvironmentMap& (*map_fn)()) {
   const std::clock_t cpu0 = std::clock();  // process CPU time: all threads
   ImportanceTableOptions options;
   options.peak_ratio = static_cast<float>(state.range(1));
+  options.fine_texels = fine_texels;
+  options.subdivision = fine_texels == FineTexels::Map ? 4 : 1;  // the renderer's tables
   for (auto _ : state) {
     ImportanceTable table(map, options);
     bytes = table.bytes_used();
@@ -54,6 +57,10 @@ void BM_TableBuild_Studio1k(benchmark::State& s) { table_build(s, studio_map); }
 void BM_TableBuild_Sunset4k(benchmark::State& s) { table_build(s, sunset_4k_map); }
 void BM_TableBuild_Sky4k(benchmark::State& s) { table_build(s, sky_4k_map); }
 void BM_TableBuild_Sky8k(benchmark::State& s) { table_build(s, sky_8k_map); }
+// The renderer's default light table: the map's own texels, 4 x 4 sub-cells.
+void BM_TableBuildMapTexels_Sunset1k(benchmark::State& s) { table_build(s, sunset_map, FineTexels::Map); }
+void BM_TableBuildMapTexels_Sunset4k(benchmark::State& s) { table_build(s, sunset_4k_map, FineTexels::Map); }
+void BM_TableBuildMapTexels_Sky8k(benchmark::State& s) { table_build(s, sky_8k_map, FineTexels::Map); }
 
 }  // namespace
 
@@ -61,6 +68,9 @@ BENCHMARK(BM_TableBuild_Sunset1k)->ArgNames({"threads", "peak_ratio"})->ArgsProd
 BENCHMARK(BM_TableBuild_Studio1k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {0, 8}})->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TableBuild_Sunset4k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {0, 8}})->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TableBuild_Sky4k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {0, 8}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TableBuildMapTexels_Sunset1k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {8}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TableBuildMapTexels_Sunset4k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {8}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TableBuildMapTexels_Sky8k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {8}})->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TableBuild_Sky8k)->ArgNames({"threads", "peak_ratio"})->ArgsProduct({{1, 2}, {8}})->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace envpis_bench

@@ -233,6 +233,30 @@ TEST(MapTexels, LightSampleWeightsAreBounded) {
   }
 }
 
+// The harness can fail: a density 10% off on alternate rows is rejected, while the map's own
+// density, average(texel) / integral (no floor, no peak bound), passes.
+TEST(MapTexels, TexelChiSquareRejectsAWrongDensity) {
+  const EnvironmentMap map = random_map(32, 16, 21);
+  const ImportanceTable t(map, map_options(2, 0, 0));
+  struct Tilted {
+    const ImportanceTable& t;
+    const EnvironmentMap& map;
+    DirectionSample sample(Point2 u) const { return t.sample(u); }
+    float pdf(Vec3 d) const {
+      const TexelCoord c = map.texel_coord(direction_to_latlong(map.to_map(d)));
+      return t.pdf(d) * (c.y % 2 ? 1.1f : 0.9f);
+    }
+  };
+  EXPECT_FALSE(texel_chi2(Tilted{t, map}, map, 1).passed);
+  struct MapsOwn {
+    const ImportanceTable& t;
+    const EnvironmentMap& map;
+    DirectionSample sample(Point2 u) const { return t.sample(u); }
+    float pdf(Vec3 d) const { return map.eval(d).average() / float(t.integral()); }
+  };
+  EXPECT_TRUE(texel_chi2(MapsOwn{t, map}, map, 1).passed);
+}
+
 TEST(MapTexels, BlackMapIsEmpty) {
   const EnvironmentMap black = EnvironmentMap::from_pixels(8, 4, std::vector<float>(8 * 4 * 3, 0.0f));
   const ImportanceTable t(black, map_options(2));
