@@ -230,13 +230,17 @@ Point2 MapTexelLevel::invert(Vec3 d) const {
 }
 
 std::vector<DirectionSums> MapTexelLevel::leaf_directions() const {
-  std::vector<DirectionSums> out(static_cast<std::size_t>(leaves_) * leaves_);
-  for (int y = 0; y < h_; ++y)
-    for (int x = 0; x < w_; ++x) {
-      const std::size_t t = static_cast<std::size_t>(y) * w_ + x;
-      const Vec3 m = latlong_to_direction({(float(x) + 0.5f) / float(w_), (float(y) + 0.5f) / float(h_)});
-      out[leaf_of_[t]].add(to_world_ * m, double(imp_[t]) * row_sr_[y], row_sr_[y]);
-    }
+  const int L = leaves_ * leaves_;
+  std::vector<DirectionSums> out(static_cast<std::size_t>(L));
+  parallel_for(0, L, [&](int begin, int end) {  // each leaf from its own texel list: no shared sums
+    for (int l = begin; l < end; ++l)
+      for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
+        const std::uint32_t t = texel_[e];
+        const int x = static_cast<int>(t % static_cast<std::uint32_t>(w_)), y = static_cast<int>(t / static_cast<std::uint32_t>(w_));
+        const Vec3 m = latlong_to_direction({(float(x) + 0.5f) / float(w_), (float(y) + 0.5f) / float(h_)});
+        out[static_cast<std::size_t>(l)].add(to_world_ * m, double(imp_[t]) * row_sr_[y], row_sr_[y]);
+      }
+  });
   return out;
 }
 
