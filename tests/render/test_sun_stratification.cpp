@@ -10,6 +10,10 @@
 //     under one of a pixel's samples, so whether a sample in a texel that straddles the sun's edge
 //     hits the sun is decided by a remainder the N samples do not cover. The sun-hit count is
 //     measured below against the texel count, so the day a finer warp fixes it, the test says so.
+//   - with the map's own texels as the fine level (FineTexels::Map, the renderer's default), a pixel's
+//     samples spread over the sun's map texels 5x more evenly than with equal-area texels
+//     (MapTexelsStratifyTheSunTexels): the fix of docs/cycles.md. The tests above keep measuring the
+//     equal-area level.
 //
 // SunConvergence.DISABLED_Measure is the measurement of docs/cycles.md (relMSE and slope of a
 // light-only GGX estimate over 64 highlight pixels); run it with --gtest_also_run_disabled_tests and
