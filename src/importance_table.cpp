@@ -310,7 +310,9 @@ ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
   const int ly = std::clamp(static_cast<int>(p.y * TS), 0, TS - 1);
   const int tx = std::clamp(static_cast<int>(p.x * float(N_)), lx * F, lx * F + F - 1);
   const int ty = std::clamp(static_cast<int>(p.y * float(N_)), ly * F, ly * F + F - 1);
-  return {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_, ly * TS + lx, tx - lx * F, ty - ly * F};
+  Located at{0, 0, ly * TS + lx, tx - lx * F, ty - ly * F};
+  cell_and_sub(at.leaf, at.cell, at.sub);
+  return at;
 }
 
 int ImportanceTable::cell_of(Point2 p) const {
@@ -372,7 +374,7 @@ float ImportanceTable::pdf_in_cell(int c, Point2 p) const {
     int cell, sub;
     cell_and_sub(at.leaf, cell, sub);
     if (cell != c) return 0.0f;
-    return subcells(c).pmf(sub) * at.density * (4.0f * kPi / (float(T_) * float(T_)));
+    return subcells(c).pmf(sub) * at.density / solid_angle_pdf(1.0f, 1.0f);
   }
   const Located at = locate(p);
   if (at.cell != c) return 0.0f;
