@@ -95,6 +95,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       sc.cos_bent = cos_bent;
       sc.jitter = rng.stream(static_cast<unsigned>(depth));
       sc.opaque = !mat.transmissive;
+      sc.depth = depth;
       light.prepare(sc);
       const DirectionSample ls = light.sample(u_light);
       if (ls.pdf > 0 && std::isfinite(ls.pdf) && is_valid_direction(ls.direction)) {

@@ -79,6 +79,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   if (!tables) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
                                 options.light_table);
+    own->product_cache = options.product_cache;
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }
@@ -180,6 +181,11 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.cpu_seconds = process_cpu_seconds() - cpu0;
   r.nonfinite_pixels = nonfinite.load();
+  for (auto& light : samplers) {
+    if (!light) continue;
+    r.product_cache_hits += light->product_cache_hits();
+    r.product_cache_misses += light->product_cache_misses();
+  }
   for (auto& rec : recorders) {
     if (!rec) continue;
     r.fireflies.insert(r.fireflies.end(), rec->records.begin(), rec->records.end());

@@ -47,6 +47,8 @@ struct RenderOptions {
   int tile_size = 16;
   OracleOptions oracle;
   ProductSamplerOptions product;
+  /// product: the shared prepared distributions (StrategyTables::product_cache; entries 0: off).
+  ProductCacheOptions product_cache;
   /// The light tables (env, mis, mis-comp, product; see StrategyTables::light_table): top resolution
   /// 1..256 (the paper's 12), fine resolution (0: from the map), the peak bound (0: off).
   ImportanceTableOptions light_table;
@@ -72,6 +74,8 @@ struct RenderResult {
   double cpu_seconds = 0;       ///< process CPU seconds (all threads) of the sampling loop: less
                                 ///< sensitive than wall time to other processes sharing the machine
   double setup_seconds = 0;     ///< wall seconds spent building tables (0 when prebuilt)
+  /// product with a cache: shading points that reused a prepared distribution, and those that did not
+  std::uint64_t product_cache_hits = 0, product_cache_misses = 0;
   std::uint64_t samples = 0;    ///< width * height * spp
   std::size_t nonfinite_pixels = 0;  ///< pixels whose estimate was NaN/Inf: set to 0
   /// With RenderOptions::firefly_log: the contributions above the threshold, sorted (sort_records),

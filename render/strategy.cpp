@@ -90,7 +90,14 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
 
 LightSampler::LightSampler(const StrategyTables& tables)
     : strategy_(tables.strategy), table_(tables.table.get()) {
-  if (strategy_ == Strategy::Product && table_) product_ = std::make_unique<ProductSampler>(*table_, tables.product);
+  if (strategy_ == Strategy::Product && table_) {
+    if (tables.product_cache.entries > 0) {
+      product_first_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
+      product_deeper_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
+    } else {
+      product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+    }
+  }
   if (strategy_ == Strategy::Oracle && tables.oracle_cells)
     oracle_ = std::make_unique<OracleSampler>(tables.oracle_cells, tables.oracle);
 }
@@ -100,17 +107,30 @@ LightSampler::~LightSampler() = default;
 
 void LightSampler::prepare(const ShadingContext& sc) {
   if (strategy_ == Strategy::Product) {
-    if (!product_) return;
+    if (!product_exact_ && !product_first_) return;
     BsdfProxy proxy;
     sc.bsdf->fill_proxy(proxy, sc.wo_local);
     if (sc.cos_bent < 1) {
       proxy.alpha_reflection = widen_roughness(proxy.alpha_reflection, sc.cos_bent);
       proxy.alpha_refraction = widen_roughness(proxy.alpha_refraction, sc.cos_bent);
     }
-    product_->prepare(sc.n, sc.wo, proxy);
+    if (product_exact_) {
+      product_exact_->prepare(sc.n, sc.wo, proxy);
+      product_ = product_exact_.get();
+    } else {
+      product_ = &(sc.depth == 0 ? product_first_ : product_deeper_)->prepare(sc.n, sc.wo, proxy);
+    }
     return;
   }
   if (oracle_) oracle_->prepare(sc);
+}
+
+std::uint64_t LightSampler::product_cache_hits() const {
+  return product_first_ ? product_first_->hits() + product_deeper_->hits() : 0;
+}
+
+std::uint64_t LightSampler::product_cache_misses() const {
+  return product_first_ ? product_first_->misses() + product_deeper_->misses() : 0;
 }
 
 DirectionSample LightSampler::sample(Point2 u) const {

@@ -64,6 +64,10 @@ struct StrategyTables {
   /// The oracle's per-cell radiance distributions (null for the other strategies).
   std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
+  /// product: share prepared distributions between shading points of one key (envpis/product_cache.h),
+  /// one cache for first hits and one for deeper vertices (so that incoherent deeper vertices do not
+  /// evict the first hits' samplers); entries 0: prepare each shading point exactly.
+  ProductCacheOptions product_cache;
   double build_seconds = 0;
 
   /// The options of the light table of env, mis, mis-comp and product (the oracle's table takes its
@@ -87,6 +91,7 @@ struct ShadingContext {
   /// True when the material reflects only (f = 0 below the surface): the oracle then skips the cells
   /// whose cone lies entirely below the surface and counts nothing from below in its cell weights.
   bool opaque = false;
+  int depth = 0;  ///< the path vertex: 0 at the camera ray's hit
   /// Cosine between a normal-mapped shading normal and the geometric normal; below 1 the product
   /// strategy widens its proxy's roughness by that angle (envpis::widen_roughness): its proxy lobes
   /// are built about the bent normal, which the geometry's horizon does not follow. 1: not bent.
@@ -116,12 +121,17 @@ class LightSampler {
   float pdf(Vec3 wi) const;
 
   /// Product sampler (strategy product), for tests and diagnostics.
-  const ProductSampler* product_sampler() const { return product_.get(); }
+  const ProductSampler* product_sampler() const { return product_; }
+  /// The product caches' hits and misses so far (0 without a cache).
+  std::uint64_t product_cache_hits() const;
+  std::uint64_t product_cache_misses() const;
 
  private:
   Strategy strategy_;
   const ImportanceTable* table_ = nullptr;
-  std::unique_ptr<ProductSampler> product_;
+  std::unique_ptr<ProductSampler> product_exact_;                 // without a cache
+  std::unique_ptr<ProductCache> product_first_, product_deeper_;  // with one
+  const ProductSampler* product_ = nullptr;                      // the current shading point's
   std::unique_ptr<OracleSampler> oracle_;
 };
 

@@ -37,7 +37,7 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
     throw Error("the refined product sampler needs a table with sub-cells (subdivision > 1)");
   refine_ = options.refine;
   if (refine_) {
-    slots_.assign(static_cast<std::size_t>(options.refine_cells) + 1,
+    slots_.assign(static_cast<std::size_t>(options.refine_cells) + kRecentCells,
                   DiscreteDistribution2D(table.subdivision(), table.subdivision()));
     slot_of_.assign(static_cast<std::size_t>(table.cell_count()), -1);
     slotted_.reserve(static_cast<std::size_t>(options.refine_cells));
@@ -49,9 +49,12 @@ Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
 bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
   valid_ = false;
   fallback_ = false;
-  scratch_cell_ = -1;
   for (int c : slotted_) slot_of_[c] = -1;
   slotted_.clear();
+  for (int& c : recent_) {
+    if (c >= 0) slot_of_[c] = -1;
+    c = -1;
+  }
   if (table_->empty() || !is_valid_direction(n) || !is_valid_direction(wo)) return false;
   const int cells = table_->cell_count();
   prepared_ = prepare_proxy(proxy, n, wo, options_.proxy);
@@ -137,12 +140,16 @@ void ProductSampler::reestimate_heaviest_cells() {
 const DiscreteDistribution2D& ProductSampler::subcells(int c) const {
   if (!refine_ || fallback_ || !valid_) return table_->subcells(c);
   if (slot_of_[c] >= 0) return slots_[slot_of_[c]];
-  DiscreteDistribution2D& scratch = slots_.back();
-  if (c != scratch_cell_) {
-    scratch_cell_ = c;
-    weigh_subcells(c, scratch);
-  }
-  return scratch;
+  // The least recently weighed of the last slots: a cell's weights are a function of the shading
+  // point, so keeping them only saves time (a reused shading point samples the same few cells).
+  const int i = next_recent_;
+  next_recent_ = (i + 1) % kRecentCells;
+  if (recent_[i] >= 0) slot_of_[recent_[i]] = -1;
+  recent_[i] = c;
+  const int slot = options_.refine_cells + i;
+  slot_of_[c] = slot;
+  weigh_subcells(c, slots_[slot]);
+  return slots_[slot];
 }
 
 DirectionSample ProductSampler::sample(Point2 u) const {

@@ -36,10 +36,12 @@ CompareSession::CompareSession(const CompareArgs& a, const CompareSettings& s, c
 
 const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
   auto it = tables_.find(s);
-  if (it == tables_.end())
+  if (it == tables_.end()) {
     it = tables_.emplace(s, render::StrategyTables::build(scene.environment(), s, base.oracle, base.product,
                                                           base.light_table))
              .first;
+    it->second.product_cache = base.product_cache;
+  }
   return it->second;
 }
 

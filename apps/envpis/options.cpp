@@ -153,6 +153,17 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "bounding cone) or moments (at its importance-weighted mean direction; "
                  "docs/refinement.md) (default: moments; the library's is cone)")
       ->type_name("cone|moments");
+  sub.add_option("--product-cache", product_cache,
+                 "product: prepared distributions kept per thread and shared by shading points that round to the "
+                 "same normal, view and material (envpis/product_cache.h), 0..1024; 0: prepare every shading "
+                 "point exactly")
+      ->type_name("N")
+      ->capture_default_str();
+  sub.add_option("--product-cache-resolution", product_cache_resolution,
+                 "product with --product-cache: K, the normal's and the view's components are rounded to "
+                 "multiples of 1/K (a direction moves by at most 0.87 / K radians), 1..4095")
+      ->type_name("B")
+      ->capture_default_str();
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -215,6 +226,9 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   // The roughness floor was the cone's remedy (a narrow lobe gives its peak to every cell its cone
   // reaches); with moments a lower one pays under MIS (docs/refinement.md), unless --proxy-min-alpha.
   if (proxy_min_alpha.empty() && o.product.cell_estimate == CellEstimate::Moments) o.product.proxy.min_alpha = 0.2f;
+  o.product_cache.entries = static_cast<int>(parse_integer("--product-cache", product_cache, 0, 1024));
+  o.product_cache.resolution =
+      static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for

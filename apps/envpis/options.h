@@ -60,6 +60,7 @@ struct SceneOptionArgs {
   std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
       cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
+  std::string product_cache = "16", product_cache_resolution = "64";
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
 

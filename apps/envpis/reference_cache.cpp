@@ -70,6 +70,8 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product && base.product.refine) key["refine_cells"] = base.product.refine_cells;
   if (strategy == Strategy::Product && base.product.cell_estimate != CellEstimate::Cone)  // old keys: cone
     key["cell_estimate"] = to_string(base.product.cell_estimate);
+  if (strategy == Strategy::Product && base.product_cache.entries > 0)  // its size changes speed, not images
+    key["product_cache_resolution"] = base.product_cache.resolution;
 }
 
 }  // namespace

@@ -114,6 +114,9 @@ void run(const RenderArgs& a) {
   std::printf(", heuristic %s, sampler %s\n", to_string(o.heuristic), to_string(o.sampler));
   std::printf("wall seconds %.3f (tables %.3f s; CPU %.3f s)\n", r.seconds, r.setup_seconds, r.cpu_seconds);
   std::printf("samples/s    %.4g\n", r.seconds > 0 ? double(r.samples) / r.seconds : 0.0);
+  if (const std::uint64_t n = r.product_cache_hits + r.product_cache_misses; n > 0)
+    std::printf("product      %.1f%% of %llu shading points reused a prepared distribution\n",
+                100.0 * double(r.product_cache_hits) / double(n), static_cast<unsigned long long>(n));
   if (r.nonfinite_pixels > 0) std::printf("non-finite   %zu pixels set to 0\n", r.nonfinite_pixels);
   if (o.firefly_log) {
     std::printf("fireflies    %zu samples above %g in %s", r.fireflies.size(), double(log.threshold),

@@ -138,14 +138,16 @@ class ProductSampler : private SubcellLevel {
   const detail::Kernels* kernels_;
   PreparedProxy prepared_;
   DiscreteDistribution2D top_;  // P[c], unnormalized (its pmf normalizes)
-  // Sub-cell distributions: one per cell re-estimated in prepare() (slot_of_[c] >= 0), and a scratch
-  // for any other cell, weighed when sample() or pdf() first needs it.
   float weigh_subcells(int c, DiscreteDistribution2D& out) const;
   void reestimate_heaviest_cells();
-  mutable std::vector<DiscreteDistribution2D> slots_;  // refine_cells + 1 (the last: the scratch)
-  std::vector<int> slot_of_;                   // per cell: its slot, or -1
-  std::vector<int> slotted_;                   // the cells holding a slot
-  mutable int scratch_cell_ = -1;
+  // Sub-cell distributions: one per cell re-estimated in prepare(), then kRecentCells for the cells
+  // sample() and pdf() needed last.
+  static constexpr int kRecentCells = 4;
+  mutable std::vector<DiscreteDistribution2D> slots_;  // refine_cells + kRecentCells
+  mutable std::vector<int> slot_of_;                   // per cell: its slot, or -1
+  std::vector<int> slotted_;                           // the cells re-estimated in prepare()
+  mutable int recent_[kRecentCells] = {-1, -1, -1, -1};
+  mutable int next_recent_ = 0;
   bool refine_ = false;
   bool valid_ = false;
   bool fallback_ = false;

@@ -1,0 +1,130 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "envpis/product_cache.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+
+namespace envpis {
+namespace {
+
+constexpr float kSteps = 255.0f;  // of a weight fraction and of sqrt(alpha)
+constexpr float kIorStepsPerOctave = 64.0f;
+constexpr float kIorOctaves = 4.0f;  // IOR clamped to [2^-4, 2^4]
+
+// A direction's lattice point: each component of the unit direction rounded to a multiple of 1/K,
+// packed as three 13-bit fields (|component| <= K < 4096).
+std::uint64_t lattice_point(Vec3 d, int k) {
+  const Vec3 u = normalize(d);
+  const float K = float(k);
+  auto field = [&](float c) { return std::uint64_t(std::lround(c * K) + k) & 0x1fff; };
+  return field(u.x) | field(u.y) << 13 | field(u.z) << 26;
+}
+Vec3 lattice_direction(std::uint64_t p, int k) {
+  auto component = [&](int shift) { return float(static_cast<long>((p >> shift) & 0x1fff) - k); };
+  return normalize(Vec3{component(0), component(13), component(26)});
+}
+
+float finite_weight(float w) { return std::isfinite(w) && w > 0 ? w : 0.0f; }
+
+// A lobe weight as a fraction of the sum in 1/255 steps; a positive weight keeps at least one step.
+std::uint32_t weight_steps(float w, float sum) {
+  if (!(w > 0)) return 0;
+  return static_cast<std::uint32_t>(std::clamp(std::lround(w / sum * kSteps), 1L, long(kSteps)));
+}
+
+std::uint32_t alpha_steps(float alpha) {
+  const float a = std::isfinite(alpha) ? std::clamp(alpha, 0.0f, 1.0f) : 1.0f;
+  return static_cast<std::uint32_t>(std::lround(std::sqrt(a) * kSteps));
+}
+float alpha_of(std::uint32_t steps) {
+  const float s = float(steps) / kSteps;
+  return s * s;
+}
+
+std::uint32_t ior_steps(float ior) {
+  const float e = std::isfinite(ior) && ior > 0 ? std::log2(ior) : 0.0f;
+  const float c = std::clamp(e, -kIorOctaves, kIorOctaves);
+  return static_cast<std::uint32_t>(std::lround((c + kIorOctaves) * kIorStepsPerOctave));
+}
+float ior_of(std::uint32_t steps) { return std::exp2(float(steps) / kIorStepsPerOctave - kIorOctaves); }
+
+}  // namespace
+
+ProductCache::ProductCache(const ImportanceTable& table, const ProductSamplerOptions& sampler,
+                           const ProductCacheOptions& options)
+    : options_(options), invalid_(table, sampler) {
+  if (options.resolution < 1 || options.resolution > 4095)
+    throw Error("product cache: resolution must be in 1..4095, got " + std::to_string(options.resolution));
+  if (options.entries < 1 || options.entries > 1024)
+    throw Error("product cache: entries must be in 1..1024, got " + std::to_string(options.entries));
+  samplers_.reserve(static_cast<std::size_t>(options.entries));
+  for (int i = 0; i < options.entries; ++i) samplers_.emplace_back(table, sampler);
+  keys_.assign(samplers_.size(), Key{});
+  last_use_.assign(samplers_.size(), 0);
+}
+
+ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy, Rounded* rounded) const {
+  Key k;
+  k.n = lattice_point(n, options_.resolution);
+  k.wo = lattice_point(wo, options_.resolution);
+
+  const float w[4] = {finite_weight(proxy.diffuse), finite_weight(proxy.translucent), finite_weight(proxy.reflection),
+                      finite_weight(proxy.refraction)};
+  const float sum = w[0] + w[1] + w[2] + w[3];
+  std::uint32_t q[4] = {};
+  for (int i = 0; i < 4; ++i) q[i] = sum > 0 && std::isfinite(sum) ? weight_steps(w[i], sum) : 0;
+  const std::uint32_t ar = alpha_steps(proxy.alpha_reflection), at = alpha_steps(proxy.alpha_refraction);
+  const std::uint32_t ior = ior_steps(proxy.ior);
+  k.proxy = std::uint64_t(q[0]) | std::uint64_t(q[1]) << 8 | std::uint64_t(q[2]) << 16 | std::uint64_t(q[3]) << 24 |
+            std::uint64_t(ar) << 32 | std::uint64_t(at) << 40 | std::uint64_t(ior) << 48;
+
+  if (!rounded) return k;
+  // The rounded point from the key alone.
+  rounded->n = lattice_direction(k.n, options_.resolution);
+  rounded->wo = lattice_direction(k.wo, options_.resolution);
+  BsdfProxy& p = rounded->proxy;
+  p = BsdfProxy{};
+  p.diffuse = float(q[0]) / kSteps;
+  p.translucent = float(q[1]) / kSteps;
+  p.reflection = float(q[2]) / kSteps;
+  p.refraction = float(q[3]) / kSteps;
+  p.alpha_reflection = alpha_of(ar);
+  p.alpha_refraction = alpha_of(at);
+  p.ior = ior_of(ior);
+  return k;
+}
+
+ProductCache::Rounded ProductCache::round(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
+  Rounded r;
+  if (is_valid_direction(n) && is_valid_direction(wo)) key(n, wo, proxy, &r);
+  return r;
+}
+
+const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
+  if (!is_valid_direction(n) || !is_valid_direction(wo)) {
+    invalid_.prepare(n, wo, proxy);  // only invalidates
+    return invalid_;
+  }
+  const Key k = key(n, wo, proxy, nullptr);
+  ++clock_;
+  std::size_t oldest = 0;
+  for (std::size_t i = 0; i < keys_.size(); ++i) {
+    if (last_use_[i] != 0 && keys_[i] == k) {
+      ++hits_;
+      last_use_[i] = clock_;
+      return samplers_[i];
+    }
+    if (last_use_[i] < last_use_[oldest]) oldest = i;
+  }
+  ++misses_;
+  keys_[oldest] = k;
+  last_use_[oldest] = clock_;
+  Rounded r;
+  key(n, wo, proxy, &r);
+  samplers_[oldest].prepare(r.n, r.wo, r.proxy);
+  return samplers_[oldest];
+}
+
+}  // namespace envpis
