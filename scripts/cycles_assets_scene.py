@@ -13,8 +13,9 @@
 #   up as envpis does, (x, y, z) -> (x, -z, y); then the scene's scale, rotate (X, then Y, then Z) and
 #   translate, through a parent empty: Blender's object matrix is T Rz Ry Rx S, envpis's order.
 # - spheres as Geometry-Nodes points (Cycles intersects exact spheres, scripts/cycles_scene.py), except
-#   transmissive ones: a fine smooth mesh, because a ray that starts inside a Cycles 3.4 point does not
-#   hit its far side (hypothesis from Cycles' point intersection, which keeps the front root only).
+#   transmissive ones: a fine smooth mesh, because a ray that starts inside a Cycles 3.x point does not
+#   hit its far side (Cycles' point_intersect_test keeps the front root only: "Always back-face culling
+#   for now"; read in Cycles' source, not measured here).
 # - quads as a square of side "size" at z = 0 with UVs (u along +X, Blender's V along +Y: glTF's v = 0
 #   at the +Y edge, as envpis's quad).
 # - materials (envpis's alpha is Cycles' roughness squared): diffuse -> Diffuse BSDF, translucent ->
