@@ -181,18 +181,26 @@ def measure(a, scene_path, env):
     result["render_seconds"] = time.time() - start
     regions, note = masks(a, scene_path, id_file, objects)
     ref_images = {cref: C.read_exr(cref)[0], eref: C.read_exr(eref)[0]}
+    pooled = []  # envpis's renders at the largest spp: the same converged image as its reference
     for key in renders:
         rows = []
         for s in a.spp:
             per_seed = []
             for k in seeds:
                 image, header = C.read_exr(renders[key][(s, k)])
+                if key != M.CYCLES and s == a.spp[-1]:
+                    pooled.append(image)
                 sec = C.blender_seconds(header, renders[key][(s, k)]) if key == M.CYCLES else seconds[(key, s, k)]
                 per_seed.append({"seed": k, "seconds": sec,
                                  "regions": M.regions_metrics(image, ref_images[refs[key]], regions)})
             rows.append({"spp": s, "seeds": per_seed})
         result["renderers"][key] = dict(reference=refs[key], **M.summarise_regions(rows))
     result["agreement"] = M.region_agreement(ref_images[cref], ref_images[eref], regions)
+    # How far apart two images of the same renderer are at about the references' noise: envpis's
+    # reference against the mean of its renders at the largest spp (len(pooled) x that spp samples).
+    # A Cycles-envpis difference at this level is the references' noise, not a mismatch.
+    result["noise_floor"] = M.region_agreement(sum(pooled) / len(pooled), ref_images[eref], regions)
+    result["noise_floor_spp"] = len(pooled) * a.spp[-1]
     result["pixels"] = {n: int(m.sum()) for n, m in regions.items()}
     result["note"] = note
     result["seconds"] = time.time() - start
@@ -212,7 +220,8 @@ def markdown(a, results, note):
                 a.ref_spp, a.seeds, note), ""]
     for r in results:
         lines += ["## %s under %s" % (r["scene_name"], r["map_name"]), "", M.scene_table(r, a.spp),
-                  "Per object at %d spp (masks: envpis's object ids):" % a.spp[-1], "",
+                  "Per object at %d spp (masks: envpis's object ids; noise floor: envpis's reference against "
+                  "the mean of its %d-spp renders, %d spp pooled):" % (a.spp[-1], a.spp[-1], r["noise_floor_spp"]), "",
                   M.object_table(r, a.spp[-1])]
         if r["note"]:
             lines += ["Note: " + r["note"], ""]

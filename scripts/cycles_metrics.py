@@ -339,13 +339,14 @@ def scene_table(scene, spps):
 
 def object_table(scene, spp):
     """One scene-map at one spp: per object, relMSE (robust in brackets) of every renderer, efficiency
-    of each envpis strategy relative to Cycles, and how far apart the two references are."""
+    of each envpis strategy relative to Cycles, how far apart the two references are, and (noise floor)
+    how far apart two images of envpis at about the references' noise are."""
     keys = list(scene["renderers"])
     names = [n for n in at_spp(scene["renderers"][keys[0]], spp)["regions"] if n != "all"]
     head = ["object", "pixels"] + ["relMSE (robust) %s" % ("Cycles" if k == CYCLES else k.replace("envpis ", ""))
                                    for k in keys]
     head += ["eff. %s / Cycles" % k.replace("envpis ", "") for k in keys if k != CYCLES]
-    head += ["references: mean rel. difference", "ratio of means C / E"]
+    head += ["references: mean rel. difference", "same renderer (noise floor)", "ratio of means C / E"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for name in names + ["all"]:
         row = {k: at_spp(scene["renderers"][k], spp)["regions"].get(name) for k in keys}
@@ -355,6 +356,8 @@ def object_table(scene, spp):
         cells += ["%s (%s)" % (fmt(row[k]["relmse"]), fmt(row[k]["relmse_trimmed"])) if row[k] else "-" for k in keys]
         cells += [fmt(ratio(row[k]["efficiency"], c["efficiency"]) if row[k] and c else None, ".2f")
                   for k in keys if k != CYCLES]
-        cells += [fmt(ag.get("mean_relative_difference"), ".3f"), fmt(ag.get("ratio_of_means"), ".3f")]
+        floor = scene.get("noise_floor", {}).get(name, {})
+        cells += [fmt(ag.get("mean_relative_difference"), ".3f"), fmt(floor.get("mean_relative_difference"), ".3f"),
+                  fmt(ag.get("ratio_of_means"), ".3f")]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

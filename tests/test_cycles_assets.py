@@ -154,7 +154,7 @@ class RegionMetrics(unittest.TestCase):
         self.assertIn("| 2.00 / 4.00 | 2.00 / 4.00 |", table)  # equal error in half the time, then half in half
         rows = M.object_table(scene, 16).splitlines()
         self.assertEqual(len(rows), 4)  # head, rule, a, all
-        self.assertTrue(rows[2].startswith("| a | 6 | 0.1 (0.05) | 0.05 (0.025) | 4.00 | 0.100 | 1.000 |"), rows[2])
+        self.assertTrue(rows[2].startswith("| a | 6 | 0.1 (0.05) | 0.05 (0.025) | 4.00 | 0.100 | - | 1.000 |"), rows[2])
 
 
 if __name__ == "__main__":
