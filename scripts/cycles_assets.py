@@ -149,60 +149,82 @@ def masks(a, scene_path, id_file, objects):
     return M.region_masks(ids, groups), None
 
 
+class Renders:
+    """Every image of one scene and map: {renderer: {(spp, seed): path}}, each renderer's reference, the
+    envpis sampling seconds, envpis's object-id AOV and object count."""
+
+    def __init__(self, d, a):
+        self.cref = os.path.join(d, "cycles-ref-%d.exr" % a.ref_spp)
+        self.eref = os.path.join(d, "envpis-ref-%s-%d.exr" % (a.ref_strategy, a.ref_spp))
+        self.id_file = os.path.join(d, "object-id.exr")
+        self.paths = {M.CYCLES: {(s, k): os.path.join(d, "cycles-%d-%d.exr" % (s, k))
+                                 for s in a.spp for k in range(a.seeds)}}
+        self.refs = {M.CYCLES: self.cref}
+        self.seconds, self.objects = {}, 0
+
+
+def render_all(a, scene_path, env, d, name):
+    """Cycles (one Blender run: reference and every spp x seed), then envpis's reference (with the
+    object ids) and every strategy x spp x seed."""
+    r = Renders(d, a)
+    start = time.time()
+    jobs = [(a.ref_spp, REF_SEED, r.cref)] + [(s, k, p) for (s, k), p in r.paths[M.CYCLES].items()]
+    log("%s: Cycles, %d renders" % (name, len(jobs)))
+    cycles_renders(a, scene_path, env, jobs)
+    log("%s: Cycles done in %.0f s; envpis reference (%s, %d spp)" % (name, time.time() - start, a.ref_strategy,
+                                                                      a.ref_spp))
+    r.objects = envpis_render(a, scene_path, env, a.ref_strategy, a.ref_spp, REF_SEED, r.eref, r.id_file)[1]
+    for strategy in a.strategies:
+        key = "envpis " + strategy
+        r.paths[key], r.refs[key] = {}, r.eref
+        for s in a.spp:
+            for k in range(a.seeds):
+                out = os.path.join(d, "envpis-%s-%d-%d.exr" % (strategy, s, k))
+                r.seconds[(key, s, k)] = envpis_render(a, scene_path, env, strategy, s, k, out)[0]
+                r.paths[key][(s, k)] = out
+    return r
+
+
+def measure_all(a, r, regions, result):
+    """Every render against its own renderer's reference, per region; the references' agreement and its
+    noise floor."""
+    ref_images = {r.cref: C.read_exr(r.cref)[0], r.eref: C.read_exr(r.eref)[0]}
+    pooled = []  # envpis's renders at the largest spp: the same converged image as its reference
+    for key, paths in r.paths.items():
+        rows = []
+        for s in a.spp:
+            per_seed = []
+            for k in range(a.seeds):
+                image, header = C.read_exr(paths[(s, k)])
+                if key != M.CYCLES and s == a.spp[-1]:
+                    pooled.append(image)
+                sec = C.blender_seconds(header, paths[(s, k)]) if key == M.CYCLES else r.seconds[(key, s, k)]
+                per_seed.append({"seed": k, "seconds": sec,
+                                 "regions": M.regions_metrics(image, ref_images[r.refs[key]], regions)})
+            rows.append({"spp": s, "seeds": per_seed})
+        result["renderers"][key] = dict(reference=r.refs[key], **M.summarise_regions(rows))
+    result["agreement"] = M.region_agreement(ref_images[r.cref], ref_images[r.eref], regions)
+    # How far apart two images of the same renderer are at about the references' noise: envpis's
+    # reference against the mean of its renders at the largest spp (len(pooled) x that spp samples).
+    # A Cycles-envpis difference at this level is the references' noise, not a mismatch.
+    result["noise_floor"] = M.region_agreement(sum(pooled) / len(pooled), ref_images[r.eref], regions)
+    result["noise_floor_spp"] = len(pooled) * a.spp[-1]
+
+
 def measure(a, scene_path, env):
     scene_name = os.path.splitext(os.path.basename(scene_path))[0].replace("assets-", "")
     map_name = os.path.splitext(os.path.basename(env))[0]
     name = "%s-%s" % (scene_name, map_name)
     d = os.path.join(a.out, name)
     os.makedirs(d, exist_ok=True)
-    seeds = list(range(a.seeds))
     result = {"name": name, "scene": scene_path, "scene_name": scene_name, "map": env, "map_name": map_name,
               "renderers": {}, "loadavg_before": C.loadavg()}
     start = time.time()
-    cref = os.path.join(d, "cycles-ref-%d.exr" % a.ref_spp)
-    jobs = [(a.ref_spp, REF_SEED, cref)] + [(s, k, os.path.join(d, "cycles-%d-%d.exr" % (s, k)))
-                                            for s in a.spp for k in seeds]
-    log("%s: Cycles, %d renders" % (name, len(jobs)))
-    cycles_renders(a, scene_path, env, jobs)
-    renders, refs, seconds = {M.CYCLES: {(s, k): p for s, k, p in jobs[1:]}}, {M.CYCLES: cref}, {}
-    log("%s: Cycles done in %.0f s; envpis reference (%s, %d spp)" % (name, time.time() - start, a.ref_strategy,
-                                                                      a.ref_spp))
-    eref = os.path.join(d, "envpis-ref-%s-%d.exr" % (a.ref_strategy, a.ref_spp))
-    id_file = os.path.join(d, "object-id.exr")
-    _, objects = envpis_render(a, scene_path, env, a.ref_strategy, a.ref_spp, REF_SEED, eref, id_file)
-    for strategy in a.strategies:
-        key = "envpis " + strategy
-        renders[key], refs[key] = {}, eref
-        for s in a.spp:
-            for k in seeds:
-                out = os.path.join(d, "envpis-%s-%d-%d.exr" % (strategy, s, k))
-                seconds[(key, s, k)] = envpis_render(a, scene_path, env, strategy, s, k, out)[0]
-                renders[key][(s, k)] = out
+    r = render_all(a, scene_path, env, d, name)
     result["render_seconds"] = time.time() - start
-    regions, note = masks(a, scene_path, id_file, objects)
-    ref_images = {cref: C.read_exr(cref)[0], eref: C.read_exr(eref)[0]}
-    pooled = []  # envpis's renders at the largest spp: the same converged image as its reference
-    for key in renders:
-        rows = []
-        for s in a.spp:
-            per_seed = []
-            for k in seeds:
-                image, header = C.read_exr(renders[key][(s, k)])
-                if key != M.CYCLES and s == a.spp[-1]:
-                    pooled.append(image)
-                sec = C.blender_seconds(header, renders[key][(s, k)]) if key == M.CYCLES else seconds[(key, s, k)]
-                per_seed.append({"seed": k, "seconds": sec,
-                                 "regions": M.regions_metrics(image, ref_images[refs[key]], regions)})
-            rows.append({"spp": s, "seeds": per_seed})
-        result["renderers"][key] = dict(reference=refs[key], **M.summarise_regions(rows))
-    result["agreement"] = M.region_agreement(ref_images[cref], ref_images[eref], regions)
-    # How far apart two images of the same renderer are at about the references' noise: envpis's
-    # reference against the mean of its renders at the largest spp (len(pooled) x that spp samples).
-    # A Cycles-envpis difference at this level is the references' noise, not a mismatch.
-    result["noise_floor"] = M.region_agreement(sum(pooled) / len(pooled), ref_images[eref], regions)
-    result["noise_floor_spp"] = len(pooled) * a.spp[-1]
+    regions, result["note"] = masks(a, scene_path, r.id_file, r.objects)
+    measure_all(a, r, regions, result)
     result["pixels"] = {n: int(m.sum()) for n, m in regions.items()}
-    result["note"] = note
     result["seconds"] = time.time() - start
     result["loadavg_after"] = C.loadavg()
     log("%s: measured; %.0f s in all" % (name, result["seconds"]))
