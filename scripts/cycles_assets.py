@@ -16,7 +16,6 @@ references are compared with each other (mean relative difference per object): w
 converged images do not share. The metrics are scripts/cycles_metrics.py's; EXRs are read by
 scripts/cycles_compare.py's read_exr.
 """
-import argparse
 import json
 import os
 import re
