@@ -144,8 +144,9 @@ def run(cmd, what):
 
 # ---- EXR files: the one place that reads them ----
 
-def read_exr(path):
-    """(pixels as float64 [height, width, 3] in R, G, B order, header attributes as a dict of strings)."""
+def read_exr(path, wanted=("R", "G", "B")):
+    """(pixels as float64 [height, width, len(wanted)] in the order of wanted, header attributes as a dict
+    of strings); wanted=("id",) reads envpis's object-id AOV."""
     # One oiiotool run prints the header ("    name: value" lines) and then every pixel
     # ("    Pixel (x, y): c0 c1 ...", scanline order from the top row, values with 9 decimals).
     out = run(["oiiotool", "--info", "-v", "--dumpdata", path], "oiiotool --info --dumpdata " + path)
@@ -159,15 +160,14 @@ def read_exr(path):
             header[m.group(1).strip()] = m.group(2).strip().strip('"')
     channels = [c.strip() for c in header.get("channel list", "").split(",")]
     m = re.search(r":\s+(\d+) x\s+(\d+),", out)
-    if not m or not all(c in channels for c in "RGB"):
-        raise Failure("'%s': not an RGB image (oiiotool says: %s)" % (path, out.splitlines()[:2]))
+    if not m or not all(c in channels for c in wanted):
+        raise Failure("'%s': no %s channels (oiiotool says: %s)" % (path, ",".join(wanted), out.splitlines()[:2]))
     width, height = int(m.group(1)), int(m.group(2))
     data = np.array(" ".join(values).split(), dtype=np.float64)
     if data.size != width * height * len(channels):
         raise Failure("'%s': expected %d values, read %d" % (path, width * height * len(channels), data.size))
     data = data.reshape(height, width, len(channels))
-    rgb = data[:, :, [channels.index(c) for c in "RGB"]]
-    return rgb, header
+    return data[:, :, [channels.index(c) for c in wanted]], header
 
 
 def blender_seconds(header, path):

@@ -95,6 +95,12 @@ def loglog_slope(spps, values, lo=SLOPE_RANGE[0], hi=SLOPE_RANGE[1]):
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx if sxx > 0 else None
 
 
+def seconds_per_spp(rows):
+    """Seconds per sample per pixel: the fastest seed of the largest spp (rows ascending in spp), over
+    that spp. Shared by cycles_compare.py and cycles_assets.py."""
+    return min(s["seconds"] for s in rows[-1]["seeds"]) / rows[-1]["spp"]
+
+
 def summarise(rows):
     """rows: [{"spp", "seeds": [image_metrics + "seconds"]}] ascending spp -> adds the medians, the seconds
     per spp, the efficiencies and the slopes; returns {"seconds_per_spp", "slope_sphere", "slope_q4", "spp"}.
@@ -103,7 +109,7 @@ def summarise(rows):
     has 10 ms steps), its fastest seed (other processes only ever slow a render down)."""
     for r in rows:
         r.update(seed_medians(r["seeds"]))
-    rate = min(s["seconds"] for s in rows[-1]["seeds"]) / rows[-1]["spp"]
+    rate = seconds_per_spp(rows)
     for r in rows:  # None when the time rounds to 0 or relMSE is 0
         for key in ("sphere", "all"):
             v = r["relmse_" + key]
@@ -240,4 +246,118 @@ def markdown(settings, scenes, note):
         lines.append("- %s: mean relative difference %.4f, ratio of means %.4f, 95th percentile %.4f." % (
             scene_label(scene), ag["mean_relative_difference"], ag["ratio_of_means"],
             ag["p95_relative_difference"]))
+    return "\n".join(lines) + "\n"
+
+
+# ---- regions (objects) of a whole scene: scripts/cycles_assets.py ----
+
+TRIM_FRACTION = 0.001        # the robust relMSE leaves out each region's top 0.1% of pixels
+
+
+def trimmed_count(n):
+    """How many of a region's n pixels the robust relMSE leaves out: ceil(n / 1000), so a region of up
+    to 1000 pixels loses its worst one (a lone caustic pixel), and none when n < 2."""
+    return 0 if n < 2 else int(math.ceil(n * TRIM_FRACTION))
+
+
+def region_metrics(e):
+    """Metrics of one region from its per-pixel errors e (1-D): relMSE, the robust figures (relMSE
+    without the top 0.1% of pixels; the median per-pixel error) and the tail (worst pixel, pixels 10x
+    off). None for an empty region."""
+    n = e.size
+    if n == 0:
+        return None
+    k = trimmed_count(n)
+    kept = np.sort(e)[:n - k]
+    return {"pixels": int(n), "relmse": float(e.mean()), "relmse_trimmed": float(kept.mean()),
+            "median": float(np.median(e)), "worst": float(e.max()),
+            "over_10x": int(np.count_nonzero(e > TAIL_THRESHOLD))}
+
+
+def regions_metrics(image, ref, regions):
+    """{region name: region_metrics} of one render against its reference; regions: {name: [h, w] bool}."""
+    e = rel_sq_error(image, ref)
+    return {name: region_metrics(e[mask]) for name, mask in regions.items()}
+
+
+def region_masks(ids, groups):
+    """{"all": everything, name: pixels whose centre sees one of the object's ids}; ids: [h, w] of the
+    object-id AOV (-1 = environment); groups: [(name, [ids])]. Objects without a pixel are left out."""
+    masks = {"all": np.ones(ids.shape, dtype=bool)}
+    for name, members in groups:
+        m = np.isin(ids, members)
+        if m.any():
+            masks[name] = m
+    return masks
+
+
+METRICS = ("relmse", "relmse_trimmed", "median", "worst", "over_10x")
+
+
+def summarise_regions(rows):
+    """rows: [{"spp", "seeds": [{"seconds", "regions": {name: region_metrics}}]}], ascending spp ->
+    per row "regions": medians over seeds of every metric, and the efficiencies 1 / (relMSE x seconds)
+    on the plain and the trimmed relMSE; returns {"seconds_per_spp", "spp": rows}."""
+    rate = seconds_per_spp(rows)
+    for r in rows:
+        names = r["seeds"][0]["regions"].keys()
+        r["regions"] = {}
+        for name in names:
+            m = {k: median([s["regions"][name][k] for s in r["seeds"]]) for k in METRICS}
+            for k in ("relmse", "relmse_trimmed"):
+                m["efficiency" + k[6:]] = 1.0 / (m[k] * r["spp"] * rate) if m[k] > 0 and rate > 0 else None
+            r["regions"][name] = m
+    return {"seconds_per_spp": rate, "spp": rows}
+
+
+def region_agreement(cycles_ref, envpis_ref, regions):
+    """{region: agreement()} of the two converged references (how far apart the renderers' images are)."""
+    return {name: agreement(cycles_ref, envpis_ref, mask) for name, mask in regions.items()}
+
+
+def scene_table(scene, spps):
+    """One scene-map: per renderer, the whole image's figures and efficiency relative to Cycles."""
+    sl = "/".join(str(s) for s in spps)
+    head = ["renderer", "relMSE %s spp" % sl, "relMSE w/o top 0.1%% %s" % sl, "median e %s" % sl, "ms/spp",
+            "efficiency vs Cycles %s" % sl, "same, robust relMSE %s" % sl, "worst pixel e %d" % spps[-1],
+            "pixels 10x off %d" % spps[-1]]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    cyc = scene["renderers"].get(CYCLES)
+    for key, r in scene["renderers"].items():
+        rows = [at_spp(r, s)["regions"]["all"] for s in spps]
+        crow = [at_spp(cyc, s)["regions"]["all"] if cyc else None for s in spps]
+        eff = [fmt(ratio(m["efficiency"], c["efficiency"]) if c else None, ".2f") for m, c in zip(rows, crow)]
+        effr = [fmt(ratio(m["efficiency_trimmed"], c["efficiency_trimmed"]) if c else None, ".2f")
+                for m, c in zip(rows, crow)]
+        lines.append("| %s | %s | %s | %s | %.2f | %s | %s | %s | %s |" % (
+            "Cycles" if key == CYCLES else key.replace("envpis ", ""),
+            " / ".join(fmt(x["relmse"]) for x in rows), " / ".join(fmt(x["relmse_trimmed"]) for x in rows),
+            " / ".join(fmt(x["median"]) for x in rows), 1000 * r["seconds_per_spp"], " / ".join(eff),
+            " / ".join(effr), fmt(rows[-1]["worst"]), fmt(rows[-1]["over_10x"], "g")))
+    return "\n".join(lines) + "\n"
+
+
+def object_table(scene, spp):
+    """One scene-map at one spp: per object, relMSE (robust in brackets) of every renderer, efficiency
+    of each envpis strategy relative to Cycles, how far apart the two references are, and (noise floor)
+    how far apart two images of envpis at about the references' noise are."""
+    keys = list(scene["renderers"])
+    names = [n for n in at_spp(scene["renderers"][keys[0]], spp)["regions"] if n != "all"]
+    head = ["object", "pixels"] + ["relMSE (robust) %s" % ("Cycles" if k == CYCLES else k.replace("envpis ", ""))
+                                   for k in keys]
+    head += ["eff. %s / Cycles" % k.replace("envpis ", "") for k in keys if k != CYCLES]
+    head += ["references: mean rel. difference", "same renderer (noise floor)", "ratio of means C / E"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name in names + ["all"]:
+        row = {k: at_spp(scene["renderers"][k], spp)["regions"].get(name) for k in keys}
+        c = row.get(CYCLES)
+        ag = scene["agreement"].get(name, {})
+        cells = [name, fmt(scene["pixels"].get(name), "d")]
+        cells += ["%s (%s)" % (fmt(row[k]["relmse"]), fmt(row[k]["relmse_trimmed"])) if row[k] else "-" for k in keys]
+        cells += [fmt(ratio(row[k]["efficiency"], c["efficiency"]) if row[k] and c else None, ".2f")
+                  for k in keys if k != CYCLES]
+        floor = scene.get("noise_floor", {}).get(name, {})
+        cells += [fmt(ag.get("mean_relative_difference"), ".3f"), fmt(floor.get("mean_relative_difference"), ".3f"),
+                  fmt(ag.get("ratio_of_means"), ".3f")]
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

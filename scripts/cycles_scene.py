@@ -33,9 +33,12 @@ import sys
 import bpy
 
 
+PROG = "cycles_scene.py"  # the prefix of error lines; a script importing this module sets its own
+
+
 def fail(message):
     # One line, then a non-zero exit status that Blender passes on (sys.exit inside --python does).
-    print("cycles_scene.py: error: " + message, file=sys.stderr)
+    print(PROG + ": error: " + message, file=sys.stderr)
     sys.stderr.flush()
     sys.exit(1)
 
@@ -83,25 +86,26 @@ def parse_args(argv):
     return args
 
 
-def sphere(material):
-    # One vertex at the origin turned into a point of radius 1: Cycles renders points as true spheres.
-    mesh = bpy.data.meshes.new("origin")
-    mesh.from_pydata([(0.0, 0.0, 0.0)], [], [])
-    obj = bpy.data.objects.new("sphere", mesh)
+def sphere(material, center=(0.0, 0.0, 0.0), radius=1.0, name="sphere"):
+    # One vertex turned into a point of the radius: Cycles renders points as true spheres.
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([tuple(center)], [], [])
+    obj = bpy.data.objects.new(name, mesh)
     bpy.context.scene.collection.objects.link(obj)
-    tree = bpy.data.node_groups.new("unit_sphere", "GeometryNodeTree")
+    tree = bpy.data.node_groups.new(name + "_sphere", "GeometryNodeTree")
     tree.inputs.new("NodeSocketGeometry", "Geometry")
     tree.outputs.new("NodeSocketGeometry", "Geometry")
     group_in = tree.nodes.new("NodeGroupInput")
     group_out = tree.nodes.new("NodeGroupOutput")
     to_points = tree.nodes.new("GeometryNodeMeshToPoints")
-    to_points.inputs["Radius"].default_value = 1.0
+    to_points.inputs["Radius"].default_value = radius
     set_material = tree.nodes.new("GeometryNodeSetMaterial")
     set_material.inputs["Material"].default_value = material
     tree.links.new(group_in.outputs[0], to_points.inputs["Mesh"])
     tree.links.new(to_points.outputs["Points"], set_material.inputs["Geometry"])
     tree.links.new(set_material.outputs[0], group_out.inputs[0])
-    obj.modifiers.new("unit_sphere", "NODES").node_group = tree
+    obj.modifiers.new(name + "_sphere", "NODES").node_group = tree
+    return obj
 
 
 def glossy(roughness):
@@ -160,7 +164,8 @@ def world(path):
     return width
 
 
-def settings(size, threads, pattern, max_bounces):
+def settings(size, threads, pattern, max_bounces, height=None):
+    # height: the film's height when it is not square (scripts/cycles_assets_scene.py).
     sc = bpy.context.scene
     sc.render.engine = "CYCLES"
     c = sc.cycles
@@ -185,7 +190,7 @@ def settings(size, threads, pattern, max_bounces):
     sc.render.threads_mode = "FIXED"
     sc.render.threads = threads
     sc.render.resolution_x = size
-    sc.render.resolution_y = size
+    sc.render.resolution_y = size if height is None else height
     sc.render.resolution_percentage = 100
     sc.render.pixel_aspect_x = 1.0
     sc.render.pixel_aspect_y = 1.0
@@ -220,9 +225,10 @@ def main():
         sys.stdout.flush()
 
 
-try:
-    main()
-except SystemExit:
-    raise
-except Exception as e:  # any bpy failure: one line and a non-zero exit, not a Blender prompt
-    fail("%s: %s" % (type(e).__name__, e))
+if __name__ == "__main__":  # also imported by scripts/cycles_assets_scene.py for its building blocks
+    try:
+        main()
+    except SystemExit:
+        raise
+    except Exception as e:  # any bpy failure: one line and a non-zero exit, not a Blender prompt
+        fail("%s: %s" % (type(e).__name__, e))
