@@ -57,10 +57,13 @@ HitMaterial resolve_material(const Scene& scene, SurfaceHit* hit, Material* scra
   return out;
 }
 
-Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log) const {
+Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log,
+                   Rgb* light_part) const {
   Rgb L{0, 0, 0};
+  if (light_part) *light_part = L;
+  PathRegularizer reg(options_.regularization);
   SurfaceHit hit;
-  if (!scene_.intersect(camera_ray, &hit)) return env_.eval(camera_ray.direction);
+  if (!scene_.intersect(camera_ray, &hit)) return reg.clamp(env_.eval(camera_ray.direction), true);
 
   const bool path = options_.kind == IntegratorKind::Path;
   const int max_depth = path ? options_.max_depth : 1;
@@ -77,9 +80,10 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     // One material per thread for textured hits, refilled at each (no allocation once grown).
     thread_local Material textured;
     const HitMaterial hm = resolve_material(scene_, &hit, &textured);
-    L += beta * hm.emission;
+    L += reg.clamp(beta * hm.emission, depth <= 1);
     const float cos_bent = hm.cos_bent;
-    const Material& bsdf = *hm.bsdf;
+    thread_local Material regularized;  // the lobes the path's regularization leaves at this vertex
+    const Material& bsdf = reg.material(*hm.bsdf, &regularized);
     const ShadingNormals sn = shading_normals(hit, mat.transmissive, wo);
     const Frame frame(sn.ns);
     const Vec3 wo_l = frame.to_local(wo);
@@ -107,8 +111,9 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
             const Rgb Le = env_.eval(wi);
             if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
               const float w = light.uses_mis() ? mis_weight(ls.pdf, bsdf.pdf(wo_l, wi_l)) : 1.0f;
-              const Rgb c = beta * f * Le * (w / ls.pdf);
+              const Rgb c = reg.clamp(beta * f * Le * (w / ls.pdf), depth == 0);
               L += c;
+              if (light_part) *light_part += c;
               if (log && log->exceeds(c.average()))
                 log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, bsdf.pdf(wo_l, wi_l), w},
                             light);
@@ -132,7 +137,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
         float w = 1.0f;
         if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction));
         const Rgb Le = env_.eval(next.direction);
-        const Rgb c = beta_next * Le * w;
+        const Rgb c = reg.clamp(beta_next * Le * w, depth == 0);
         L += c;
         if (log && log->exceeds(c.average())) {
           const float light_pdf = light.has_light_samples() ? light.pdf(next.direction) : 0.0f;
@@ -144,6 +149,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
       break;
     }
     beta = beta_next;
+    reg.bounce(*bs);
     if (depth + 1 >= max_depth) break;
     if (depth + 1 >= options_.rr_depth) {
       const float q = std::min(0.95f, max_component(beta));

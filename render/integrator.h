@@ -18,6 +18,9 @@
 // normal's side) and, with Scene::widen_bent_normals, the product strategy's proxy is widened by the
 // angle between the two (ShadingContext::cos_bent).
 //
+// Path regularization (render/regularization.h, off by default) clamps each contribution, and
+// filters each vertex's lobes from what the path did before it (PathRegularizer).
+//
 // Light samples that arrive below the surface (of an opaque material), that have pdf 0, or whose
 // geometric and shading sides disagree contribute nothing.
 #pragma once
@@ -25,6 +28,7 @@
 #include <string>
 
 #include "render/firefly_log.h"
+#include "render/regularization.h"
 #include "render/sampler.h"
 #include "render/scene.h"
 #include "render/strategy.h"
@@ -40,6 +44,7 @@ struct IntegratorOptions {
   Heuristic heuristic = Heuristic::Power;
   int max_depth = 8;  ///< path: maximum number of surface interactions (>= 1)
   int rr_depth = 3;   ///< path: Russian roulette from this many interactions on
+  RegularizationOptions regularization;  ///< Cycles' clamp, caustics and filter glossy (default: off)
 };
 
 /// Random-number dimensions used by one pixel sample: 2 for the pixel position, then a fixed block
@@ -80,7 +85,10 @@ class Integrator {
   Integrator(const Scene& scene, const IntegratorOptions& options);
   /// Radiance arriving along the camera ray. `log` (null: off) sees every light and BSDF sample
   /// contribution that exceeds its threshold (render/firefly_log.h); it changes nothing.
-  Rgb li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log = nullptr) const;
+  /// `light_part` (null: off) receives the part of the result that light samples brought (every
+  /// vertex's; the rest came from BSDF samples, emission and the camera's view of the environment).
+  Rgb li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log = nullptr,
+         Rgb* light_part = nullptr) const;
   const IntegratorOptions& options() const { return options_; }
 
  private:

@@ -33,6 +33,18 @@ struct BsdfSample {
   float pdf = 0;  ///< solid-angle density of the whole material's sampling of wi
   Rgb weight;     ///< f * |cos theta_i| / pdf
   bool transmission = false;
+  /// Drawn from a diffuse component (Lambert, translucent, a coat's base): Cycles' LABEL_DIFFUSE,
+  /// which its caustics switches test (render/regularization.h).
+  bool diffuse = false;
+};
+
+/// What path regularization (render/regularization.h) leaves of a lobe at one vertex: GGX roughness
+/// raised to at least min_alpha (Cycles' Filter Glossy), and whether glossy reflection and glossy
+/// refraction stay (Cycles' reflective and refractive caustics switches). Diffuse parts always stay.
+struct LobeFilter {
+  float min_alpha = 0;
+  bool reflection = true;
+  bool refraction = true;
 };
 
 /// One lobe. Implementations live in render/materials/, one file per lobe.
@@ -48,6 +60,15 @@ class Lobe {
   /// Adds this lobe (scaled by `weight`) to the proxy as the paper describes.
   virtual void add_to_proxy(BsdfProxy& proxy, Vec3 wo, float weight) const = 0;
   virtual std::string name() const = 0;
+  /// The lobe under `filter`: false when nothing of it is left; otherwise *changed receives a new
+  /// lobe when the filter changes it and stays null when it does not (a diffuse lobe never changes).
+  /// A changed lobe keeps the original's albedo tables, which only weigh the lobe choice and the proxy
+  /// (and a coat's base), so eval, pdf, sample and the proxy still all describe the same lobe.
+  virtual bool filtered(const LobeFilter& filter, std::shared_ptr<const Lobe>* changed) const {
+    (void)filter;
+    (void)changed;
+    return true;
+  }
 };
 
 /// A material: sum of weighted lobes. eval sums the lobes; sample picks a lobe with probability
@@ -80,6 +101,9 @@ class Material {
   /// flipped towards the viewer (they have no lobe below the surface anyway).
   void set_closed_surface(bool closed) { closed_surface_ = closed; }
   bool closed_surface() const { return closed_surface_; }
+  /// Refills `out` with this material's lobes under `filter` (Lobe::filtered), same weights, same
+  /// closed-surface flag (no allocation for unchanged lobes once out's storage has grown).
+  void filter_into(const LobeFilter& filter, Material* out) const;
   /// Sum of weight * albedo(wo) over the lobes (the material's estimated directional albedo).
   float albedo(Vec3 wo) const;
   std::size_t lobe_count() const { return lobes_.size(); }

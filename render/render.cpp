@@ -24,6 +24,16 @@ double process_cpu_seconds() {
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_utime.tv_sec) + double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
+
+/// The variance of the mean of n samples from their sum and sum of squares (sample variance / n).
+double variance_of_mean(double sum, double sum2, double n) {
+  const double mean = sum / n;
+  return n > 1 ? std::max(0.0, (sum2 - n * mean * mean) / (n - 1)) / n : 0.0;
+}
+
+/// Radiance near the 1e30 clamp has a variance beyond float range: saturate it rather than drop a
+/// finite pixel.
+float saturate_float(double v) { return static_cast<float>(std::min(v, double(std::numeric_limits<float>::max()))); }
 }  // namespace
 
 void validate(const RenderOptions& o) {
@@ -38,6 +48,7 @@ void validate(const RenderOptions& o) {
   if (o.max_depth > 1024) throw Error("max depth must be at most 1024");
   if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
+  validate(o.regularization);
   const ImportanceTableOptions& lt = o.light_table;
   envpis::validate(lt);
   if (o.tables && o.tables->table &&
@@ -71,6 +82,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const std::size_t npix = static_cast<std::size_t>(W) * H;
   r.rgb.assign(npix * 3, 0.0f);
   r.variance.assign(npix, 0.0f);
+  r.light_variance.assign(npix, 0.0f);
   r.object_id.assign(npix, -1);
   r.samples = static_cast<std::uint64_t>(npix) * static_cast<std::uint64_t>(options.spp);
 
@@ -89,6 +101,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   io.heuristic = options.heuristic;
   io.max_depth = options.max_depth;
   io.rr_depth = options.rr_depth;
+  io.regularization = options.regularization;
   const Integrator integrator(scene, io);
 
   const int ts = options.tile_size;
@@ -124,19 +137,23 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
               for (int x = x0; x < x1; ++x) {
                 const std::size_t pix = static_cast<std::size_t>(y) * W + x;
                 double sum[3] = {0, 0, 0};
-                double sum_avg = 0, sum_avg2 = 0;
+                double sum_avg = 0, sum_avg2 = 0, sum_light = 0, sum_light2 = 0;
                 for (int s = 0; s < options.spp; ++s) {
                   PixelSampler rng(options.sampler, options.seed, pix, static_cast<std::uint64_t>(s));
                   const Point2 jitter = rng.next2d();
                   const Ray ray = camera.generate_ray(float(x) + jitter.x, float(y) + jitter.y);
                   if (log) log->begin_sample(x, y, s);
-                  const Rgb L = integrator.li(ray, rng, light, log);
+                  Rgb light_part;
+                  const Rgb L = integrator.li(ray, rng, light, log, &light_part);
                   sum[0] += L.r;
                   sum[1] += L.g;
                   sum[2] += L.b;
                   const double a = (double(L.r) + L.g + L.b) / 3.0;
                   sum_avg += a;
                   sum_avg2 += a * a;
+                  const double l = (double(light_part.r) + light_part.g + light_part.b) / 3.0;
+                  sum_light += l;
+                  sum_light2 += l * l;
                 }
                 const double n = options.spp;
                 float* out = &r.rgb[pix * 3];
@@ -145,14 +162,12 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                   out[c] = static_cast<float>(sum[c] / n);
                   finite = finite && std::isfinite(out[c]);
                 }
-                const double mean = sum_avg / n;
-                const double var = n > 1 ? std::max(0.0, (sum_avg2 - n * mean * mean) / (n - 1)) / n : 0.0;
-                // Radiance near the 1e30 clamp has a variance beyond float range: saturate it rather
-                // than drop a finite pixel.
-                r.variance[pix] = static_cast<float>(std::min(var, double(std::numeric_limits<float>::max())));
+                const double var = variance_of_mean(sum_avg, sum_avg2, n);
+                r.variance[pix] = saturate_float(var);
+                r.light_variance[pix] = saturate_float(variance_of_mean(sum_light, sum_light2, n));
                 if (!finite || !std::isfinite(var)) {
                   out[0] = out[1] = out[2] = 0.0f;
-                  r.variance[pix] = 0.0f;
+                  r.variance[pix] = r.light_variance[pix] = 0.0f;
                   nonfinite.fetch_add(1, std::memory_order_relaxed);
                 }
                 SurfaceHit hit;

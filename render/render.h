@@ -44,6 +44,8 @@ struct RenderOptions {
   int threads = 0;            ///< 0: all hardware threads (or the enclosing tbb limit)
   int max_depth = 8;          ///< path integrator
   int rr_depth = 3;           ///< path integrator: Russian roulette from this depth on
+  /// Cycles' clamp, caustics switches and filter glossy (render/regularization.h); default off.
+  RegularizationOptions regularization;
   int tile_size = 16;
   OracleOptions oracle;
   ProductSamplerOptions product;
@@ -69,6 +71,9 @@ struct RenderResult {
   IntegratorKind integrator = IntegratorKind::Path;
   std::vector<float> rgb;       ///< width * height * 3, row-major, top row first
   std::vector<float> variance;  ///< per pixel: variance of the pixel's mean of (R+G+B)/3 (sample variance / spp)
+  /// per pixel: the same variance of the part light samples brought (Integrator::li's light_part):
+  /// how much of the noise environment sampling can act on at all
+  std::vector<float> light_variance;
   std::vector<int> object_id;   ///< per pixel: object seen by the ray through the pixel centre, -1 = environment
   double seconds = 0;           ///< wall seconds of the sampling loop
   double cpu_seconds = 0;       ///< process CPU seconds (all threads) of the sampling loop: less

@@ -3,24 +3,30 @@
 # The asset-scene evidence of docs/assets.md (issue 12): `envpis compare` of every scenes/assets-*.json
 # under each map (the 8 blender-data maps and the @pmndrs/assets HDRIs of scripts/fetch-assets.sh), the
 # path integrator, the default (Sobol) sampler, strategies mis, mis-comp and product, equal spp and
-# equal time, medians over SEEDS seeds; then the widen_roughness on/off runs on the normal-mapped
-# scenes (product only); scripts/assets_table.py writes OUT/table.md. Each run's report (a page a
-# person can open, with the images) is OUT/<scene>--<map>/index.html.
+# equal time, medians over SEEDS seeds; with REGULARIZE=1 the same runs again with Cycles-style path
+# regularization (REGULARIZATION, default: Cycles' Filter Glossy 1 and Clamp Indirect 10 with both
+# caustics switches off) into OUT/regularized/; then the widen_roughness on/off runs on the
+# normal-mapped scenes (product only); scripts/assets_table.py writes OUT/table.md (both variants,
+# labelled). Each run's report (a page a person can open, with the images) is
+# OUT/[regularized/]<scene>--<map>/index.html.
 #
-# Override WIDTH, HEIGHT (default 160 x 90), SPP (16), REF_SPP (512), SEEDS (3), MAX_DEPTH (8),
+# Override WIDTH, HEIGHT (default 128 x 72), SPP (64), REF_SPP (1024), SEEDS (3), MAX_DEPTH (8),
 # SCENES, MAPS (default: the 8 blender maps + 8 @pmndrs HDRIs), OUT, BUILD (REBUILD=0: use BUILD as is),
+# REGULARIZE (1: also the regularized runs), REGULARIZATION (the envpis options of those runs),
 # WIDEN (1: also the widen_roughness runs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 OUT=${OUT:-out/assets-bench}
-WIDTH=${WIDTH:-160}
-HEIGHT=${HEIGHT:-90}
-SPP=${SPP:-16}
-REF_SPP=${REF_SPP:-512}
+WIDTH=${WIDTH:-128}
+HEIGHT=${HEIGHT:-72}
+SPP=${SPP:-64}
+REF_SPP=${REF_SPP:-1024}
 SEEDS=${SEEDS:-3}
 MAX_DEPTH=${MAX_DEPTH:-8}
 WIDEN=${WIDEN:-1}
+REGULARIZE=${REGULARIZE:-0}
+REGULARIZATION=${REGULARIZATION:-"--filter-glossy 1 --clamp-indirect 10 --caustics none"}
 ASSETS=${ENVPIS_ASSETS:-${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets}
 SCENES=${SCENES:-scenes/assets-*.json}
 PMNDRS="apartment city dawn forest lobby park studio sunset"
@@ -46,6 +52,10 @@ for scene in $SCENES; do
   name=${name#assets-}
   for map in $MAPS; do
     compare "$scene" "$name" "$map" mis,mis-comp,product --equal-time auto
+    if [ "$REGULARIZE" = 1 ]; then
+      # shellcheck disable=SC2086  # REGULARIZATION is a list of options
+      compare "$scene" "regularized/$name" "$map" mis,mis-comp,product --equal-time auto $REGULARIZATION
+    fi
   done
 done
 if [ "$WIDEN" = 1 ]; then

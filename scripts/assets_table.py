@@ -1,13 +1,17 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
 """Aggregates the `envpis compare` runs of scripts/assets-bench.sh (asset scenes x maps, path integrator,
-medians over seeds) into the markdown tables of docs/assets.md:
+medians over seeds) into the markdown tables of docs/assets.md, once for the unregularized runs (OUT)
+and once for the regularized ones (OUT/regularized, with REGULARIZE=1), each under its own heading:
 
   1. per scene and map: overhead time(product) / time(mis) and whole-image relMSE ratios;
   2. per object (pooled over the maps): relMSE ratios mis / product and mis-comp / product at equal
      spp, and efficiency ratios (1 / (relMSE x time): product over mis and over mis-comp);
-  3. the issue's targets, met or not;
-  4. (when OUT/widen-*/ exists) product with and without widen_roughness on normal-mapped objects.
+  3. per object, the figures one caustic pixel cannot decide (relMSE without each object's worst 0.1%
+     of pixels, the median per-pixel error), the tail (worst pixel, pixels 10x off) and the share of
+     the variance that light samples brought (metrics.h);
+  4. the issue's targets, met or not, with relMSE and with the trimmed relMSE;
+  5. (when OUT/widen-*/ exists) product with and without widen_roughness on normal-mapped objects.
 
     python3 scripts/assets_table.py OUT > OUT/table.md
 
@@ -55,9 +59,85 @@ def load(out, prefix):
     return runs
 
 
+def regularization_label(runs):
+    """The runs' path regularization in words (metrics.json "regularization")."""
+    labels = set()
+    for j in runs.values():
+        r = j.get("regularization")
+        if not j.get("regularized") or not r:
+            labels.add("unregularized")
+            continue
+        parts = []
+        if r["clamp_direct"] > 0:
+            parts.append(f"clamp direct {r['clamp_direct']:g}")
+        if r["clamp_indirect"] > 0:
+            parts.append(f"clamp indirect {r['clamp_indirect']:g}")
+        if r["caustics"] != "reflective,refractive":
+            parts.append(f"caustics {r['caustics']}")
+        if r["filter_glossy"] > 0:
+            parts.append(f"filter glossy {r['filter_glossy']:g}")
+        labels.add("regularized: " + ", ".join(parts))
+    return "; ".join(sorted(labels)) or "no runs"
+
+
+def ratio(a, b):
+    return a / b if a is not None and b is not None and b > 0 and math.isfinite(a) and math.isfinite(b) else float("nan")
+
+
+def robust_table(runs):
+    """Per object, pooled over the maps: the figures one caustic pixel cannot decide, the tail and the
+    light samples' share of the variance."""
+    rows = {}
+    for (scene, env), j in sorted(runs.items()):
+        s = strategies(j["equal_spp"])
+        c, p = s["mis-comp"], s["product"]
+        for rc, rp in zip(c["regions"], p["regions"]):
+            if not rp.get("relmse") or rp["relmse"] <= 0:
+                continue
+            d = rows.setdefault((scene, rp["name"]), {k: [] for k in ("rel", "trim", "med", "eff_trim", "share_c", "share_p")} | {"tail_c": 0, "tail_p": 0, "worst_c": 0.0, "worst_p": 0.0})
+            d["rel"].append(ratio(rc["relmse"], rp["relmse"]))
+            d["trim"].append(ratio(rc.get("relmse_trimmed"), rp.get("relmse_trimmed")))
+            d["med"].append(ratio(rc.get("median_rel_sq_error"), rp.get("median_rel_sq_error")))
+            d["eff_trim"].append(ratio(rc.get("relmse_trimmed", 0) * c["seconds"], rp.get("relmse_trimmed", 0) * p["seconds"]))
+            d["share_c"].append(rc.get("light_variance_share"))
+            d["share_p"].append(rp.get("light_variance_share"))
+            d["tail_c"] += rc.get("pixels_over_10x") or 0
+            d["tail_p"] += rp.get("pixels_over_10x") or 0
+            d["worst_c"] = max(d["worst_c"], rc.get("max_rel_sq_error_worst") or 0)
+            d["worst_p"] = max(d["worst_p"], rp.get("max_rel_sq_error_worst") or 0)
+    print("\n### Per object: robust figures, tail and light share (equal spp, pooled over the maps)\n")
+    print("Ratios mis-comp / product (> 1 favours product): relMSE, relMSE without the object's worst 0.1% of "
+          "pixels (\"trimmed\"), median per-pixel error; efficiency product / mis-comp from the trimmed relMSE. "
+          "Light share: the part of the object's variance that light samples brought (median over maps). Tail: "
+          "pixels more than 10x off (median over seeds, summed over maps) and the worst pixel's relative squared "
+          "error (worst seed and map).\n")
+    print("| scene | object | relMSE | trimmed relMSE | median error | eff. (trimmed) | light share mis-comp | light share product | px > 10x mis-comp / product | worst pixel mis-comp / product |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    glossy = []
+    for (scene, obj), d in sorted(rows.items()):
+        a = alpha_of(scene, obj)
+        if a is not None and 0.05 <= a <= 0.5:
+            glossy += d["eff_trim"]
+        print(f"| {scene} | {obj} | {f(geomean(d['rel']))} | {f(geomean(d['trim']))} | {f(geomean(d['med']))} | "
+              f"{f(geomean(d['eff_trim']))} | {f(median(d['share_c']))} | {f(median(d['share_p']))} | "
+              f"{d['tail_c']:g} / {d['tail_p']:g} | {d['worst_c']:.3g} / {d['worst_p']:.3g} |")
+    return geomean(glossy)
+
+
 def main(out):
+    report(out)
+    reg = os.path.join(out, "regularized")  # scripts/assets-bench.sh with REGULARIZE=1
+    if os.path.isdir(reg):
+        print("\n")
+        report(reg)
+    widen_table(out)
+
+
+def report(out):
     runs = load(out, "")
     runs = {k: v for k, v in runs.items() if not k[0].startswith("widen-")}
+    label = regularization_label(runs)
+    print(f"## {label[0].upper() + label[1:]}\n")
     print("### Per scene and map (path integrator, equal spp; medians over seeds)\n")
     print("| scene | map | overhead product/mis | relMSE mis/product | relMSE mis-comp/product | eff. product/mis | eff. product/mis-comp | equal time: relMSE mis/product | equal time: relMSE mis-comp/product |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -100,14 +180,18 @@ def main(out):
         print(f"| {scene} | {obj} | {f(a, 3) if a is not None else 'mixed or textured'} | {d['n']} | {f(geomean(d['mis']))} ({f(min(d['mis']))}) | "
               f"{f(geomean(d['comp']))} ({f(min(d['comp']))}) | {f(geomean(d['eff_mis']))} | {f(geomean(d['eff_comp']))} | {d['worse']} ({d['worse_noise']}) |")
     pooled = geomean(glossy_eff_comp)
+    pooled_trimmed = robust_table(runs)
     ov = median(overheads)
     print("\n### Targets\n")
     print("| target | measured | met |")
     print("|---|---|---|")
     print(f"| efficiency product / mis-comp >= {TARGET_EFFICIENCY_OVER_MIS_COMP}, pooled over glossy objects (alpha 0.05-0.5) | {f(pooled)} | {'yes' if pooled >= TARGET_EFFICIENCY_OVER_MIS_COMP else 'no'} |")
+    print(f"| the same from the trimmed relMSE (worst 0.1% of each object's pixels left out) | {f(pooled_trimmed)} | {'yes' if pooled_trimmed >= TARGET_EFFICIENCY_OVER_MIS_COMP else 'no'} |")
     print(f"| no object worse than mis (median over seeds) | {worse_total} of {object_maps} object-maps worse ({worse_noise_total} beyond 2 stderr) | {'yes' if worse_total == 0 else 'no'} |")
     print(f"| overhead time(product) / time(mis) <= {TARGET_OVERHEAD} (median over scene-maps) | {f(ov)} (max {f(max(overheads) if overheads else float('nan'))}) | {'yes' if ov <= TARGET_OVERHEAD else 'no'} |")
 
+
+def widen_table(out):
     widen = load(out, "widen-")
     if widen:
         print("\n### widen_roughness on normal-mapped objects (product, equal spp, medians over seeds)\n")

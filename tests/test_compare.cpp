@@ -84,6 +84,48 @@ TEST(CompareMetrics, TailOfAHandBuiltImage) {
   EXPECT_EQ(none.regions[0].pixels_over_10x, 0u);
 }
 
+// The robust figures of the same image: without its worst ceil(0.1%) pixels (one here) and the median;
+// one huge pixel moves the relMSE but neither of them.
+TEST(CompareMetrics, TrimmedAndMedianIgnoreOneHugePixel) {
+  using namespace envpis::app;
+  const std::vector<float> ref{1, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0, 0, 1, 1, 1};
+  std::vector<float> img{1, 1, 1, 10, 10, 10, 12, 12, 12, 0.5f, 0.5f, 0.5f, 1, 1, 22};
+  const std::vector<float> var(5, 0.0f);
+  const std::vector<int> ids{0, 0, 1, -1, 1};
+  const double e[5] = {0, 81 / 1.01, 121 / 1.01, 0.25 / 0.01, 441 / 1.01 / 3};
+  const ImageMetrics m = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {0, 1});
+  EXPECT_NEAR(m.image.relmse_trimmed, (e[1] + e[2] + e[3]) / 4, 1e-9);  // e[4], the worst, left out
+  EXPECT_NEAR(m.image.median_rel_sq_error, e[1], 1e-9);
+  EXPECT_NEAR(m.regions[0].relmse_trimmed, 0, 1e-12);  // two pixels: the worst of them left out
+  EXPECT_NEAR(m.regions[1].median_rel_sq_error, (e[2] + e[4]) / 2, 1e-9);
+  img[14] = 1e6f;  // a firefly in the worst pixel
+  const ImageMetrics f = measure(NoisyImage{img, var}, NoisyImage{ref, var}, ids, {0, 1});
+  EXPECT_GT(f.image.relmse, 1e10);
+  EXPECT_DOUBLE_EQ(f.image.relmse_trimmed, m.image.relmse_trimmed);
+  EXPECT_DOUBLE_EQ(f.image.median_rel_sq_error, m.image.median_rel_sq_error);
+  EXPECT_TRUE(std::isnan(trimmed_mean({})));
+  EXPECT_EQ(trimmed_mean({5}), 5);  // never all: one pixel stays
+  std::vector<double> many(2500, 1.0);
+  many[0] = many[1] = many[2] = 1e9;  // ceil(2.5) = 3 left out
+  EXPECT_EQ(trimmed_mean(many), 1.0);
+}
+
+// The light samples' share of the variance, weighted as relMSE weighs each pixel: 1 / (R^2 + 0.01).
+TEST(CompareMetrics, LightVarianceShare) {
+  using namespace envpis::app;
+  const std::vector<float> ref{1, 1, 1, 0, 0, 0};
+  const std::vector<float> img{1, 1, 1, 0, 0, 0};
+  const std::vector<float> var{2, 0.01f}, light{1, 0.01f}, ref_var(2, 0.0f);
+  const std::vector<int> ids{0, 1};
+  const ImageMetrics m = measure(NoisyImage{img, var, &light}, NoisyImage{ref, ref_var}, ids, {0, 1});
+  EXPECT_NEAR(m.regions[0].light_variance_share, 0.5, 1e-6);
+  EXPECT_NEAR(m.regions[1].light_variance_share, 1.0, 1e-6);
+  // Whole image: (1 / 1.01 + 0.01 / 0.01) / (2 / 1.01 + 0.01 / 0.01)
+  EXPECT_NEAR(m.image.light_variance_share, (1 / 1.01 + 1) / (2 / 1.01 + 1), 1e-6);
+  const ImageMetrics unknown = measure(NoisyImage{img, var}, NoisyImage{ref, ref_var}, ids, {0});
+  EXPECT_TRUE(std::isnan(unknown.image.light_variance_share));
+}
+
 TEST(CompareMetrics, Median) {
   using envpis::app::median;
   EXPECT_EQ(median({3, 1, 2}), 2);
@@ -148,6 +190,10 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --analysis-points many" + o, "--analysis-points: expected an integer in 1..10000, got 'many'"},
       {"compare --analysis-points 10001" + o, "--analysis-points: must be in 1..10000, got '10001'"},
       {"compare --no-analysis --analysis-points 2" + o, "--analysis-points cannot be combined with --no-analysis"},
+      {"compare --filter-glossy -1" + o, "--filter-glossy: must be >= 0 (0: off), got '-1'"},
+      {"compare --clamp-direct nan" + o, "--clamp-direct: expected a finite number, got 'nan'"},
+      {"compare --clamp-indirect inf" + o, "--clamp-indirect: expected a finite number, got 'inf'"},
+      {"compare --caustics glossy" + o, "--caustics: unknown caustics 'glossy'"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
@@ -186,6 +232,8 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_TRUE(m["analysis"].is_null()) << "--no-analysis";
   EXPECT_FALSE(m.contains("analysis_unavailable"));
   ASSERT_TRUE(m["overhead"].is_object());
+  EXPECT_EQ(m["regularized"], false);
+  EXPECT_EQ(m["regularization"]["caustics"], "reflective,refractive");
   EXPECT_GT(m["overhead"]["ratio"].get<double>(), 0);
   ASSERT_EQ(m["regions"].size(), 8u) << "fig1: one region per sphere";
   EXPECT_EQ(m["regions"][0]["name"], "conductor-0.02");
@@ -238,6 +286,10 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
         EXPECT_NEAR(reg["relmse"].get<double>(), want, 1e-6 * want + 1e-12) << s["strategy"] << " region " << id;
         EXPECT_NEAR(reg["max_rel_sq_error"].get<double>(), region_max[id], 1e-6 * region_max[id]) << s["strategy"] << " region " << id;
         EXPECT_EQ(reg["pixels_over_10x"].get<double>(), region_over[id]) << s["strategy"] << " region " << id;
+        // The robust figures lie below the relMSE, which a few worst pixels can decide.
+        EXPECT_LE(reg["relmse_trimmed"].get<double>(), reg["relmse"].get<double>() * (1 + 1e-9)) << s["strategy"];
+        EXPECT_LE(reg["median_rel_sq_error"].get<double>(), reg["max_rel_sq_error"].get<double>()) << s["strategy"];
+        EXPECT_TRUE(reg.contains("light_variance_share")) << s["strategy"];
       }
       for (const char* k : {"png", "error_png"}) EXPECT_TRUE(fs::exists(out / s["images"][k].get<std::string>()));
     }

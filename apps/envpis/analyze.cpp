@@ -180,8 +180,9 @@ const RegisterCommand reg{{"analyze",
                                  ->capture_default_str();
                              a->common.add_sampling_options(sub);
                              // The analyzer models the direct integrator and integrates exactly: no
-                             // paths, no random numbers.
-                             for (const char* name : {"--integrator", "--sampler", "--max-depth"})
+                             // paths, no random numbers, nothing to regularize.
+                             for (const char* name : {"--integrator", "--sampler", "--max-depth", "--clamp-direct",
+                                                      "--clamp-indirect", "--caustics", "--filter-glossy"})
                                sub.remove_option(sub.get_option(name));
                              sub.add_option("--json", a->json_out, "write every number to this JSON file")
                                  ->type_name("FILE.json");

@@ -64,8 +64,10 @@ void print_set(const char* title, const MeasuredSet& set) {
       std::printf(" %8.2fx", headline_relmse(*mis) / rel);
     else
       std::printf(" %9s", "-");
-    std::printf(" %11.4g %8g\n", median(over_seeds(m, [](const ImageMetrics& x) { return x.image.max_rel_sq_error; })),
-                median(over_seeds(m, [](const ImageMetrics& x) { return x.image.pixels_over_10x; })));
+    std::printf(" %11.4g %8g %11.4g\n",
+                median(over_seeds(m, [](const ImageMetrics& x) { return x.image.max_rel_sq_error; })),
+                median(over_seeds(m, [](const ImageMetrics& x) { return x.image.pixels_over_10x; })),
+                median(over_seeds(m, [](const ImageMetrics& x) { return x.image.relmse_trimmed; })));
   }
 }
 
@@ -73,8 +75,8 @@ void print_set(const char* title, const MeasuredSet& set) {
 void print_summary(const CompareSession& session, const Comparison& c) {
   if (session.settings.nseeds > 1)
     std::printf("(relMSE, efficiency and the tail: medians over %d seeds)\n", session.settings.nseeds);
-  std::printf("%-9s %8s %9s %11s %11s %9s %11s %8s\n", "strategy", "spp", "seconds", "relMSE", "efficiency", "vs mis",
-              "max rel.e", ">10x px");
+  std::printf("%-9s %8s %9s %11s %11s %9s %11s %8s %11s\n", "strategy", "spp", "seconds", "relMSE", "efficiency",
+              "vs mis", "max rel.e", ">10x px", "trimmed");
   print_set("equal spp:", c.equal_spp);
   if (!c.equal_time.measured.empty()) print_set("equal time:", c.equal_time);
   if (!c.overhead.is_null())

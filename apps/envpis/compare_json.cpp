@@ -47,6 +47,13 @@ void put_seed_statistics(json& j, const Measured& m, std::size_t region) {
                  num, false);
   put_over_seeds(j, "pixels_over_10x", over_seeds(m, [&](const ImageMetrics& x) { return set(x).pixels_over_10x; }),
                  count_json, false);
+  // The figures one caustic pixel cannot decide, and the light samples' share of the variance.
+  put_over_seeds(j, "relmse_trimmed", over_seeds(m, [&](const ImageMetrics& x) { return set(x).relmse_trimmed; }), num,
+                 true);
+  put_over_seeds(j, "median_rel_sq_error",
+                 over_seeds(m, [&](const ImageMetrics& x) { return set(x).median_rel_sq_error; }), num, true);
+  put_over_seeds(j, "light_variance_share",
+                 over_seeds(m, [&](const ImageMetrics& x) { return set(x).light_variance_share; }), num, true);
 }
 
 json set_json(const MeasuredSet& set, const std::vector<Region>& regions) {
@@ -91,6 +98,12 @@ void put_definitions(json& j) {
   j["efficiency_definition"] = "1 / (relmse * seconds), seconds = wall time of the sampling loop";
   j["tail_definition"] = "per-pixel relative squared error e = mean over channels of (I - R)^2 / (R^2 + 0.01); "
                          "max_rel_sq_error = the largest e; pixels_over_10x = the number of pixels with e > 100";
+  j["robust_definition"] = "relmse_trimmed = the mean of e without the worst ceil(0.1%) of the pixels (at least one, "
+                           "never all); median_rel_sq_error = the median of e";
+  j["light_variance_share_definition"] =
+      "sum over pixels of var_light / (R^2 + 0.01) over the sum of var / (R^2 + 0.01): var the variance of the "
+      "pixel's mean, var_light that of the part light samples brought (at every path vertex); the covariance "
+      "of the two parts is in var, so the share can exceed 1";
   j["seeds_definition"] = "each strategy is rendered once per seed in `seeds`; relmse (= relmse_median), efficiency, "
                           "max_rel_sq_error and pixels_over_10x are medians over the seeds, _min/_max/_worst their "
                           "spread, _seeds the values per seed; images, relmse_stderr, mean, z, nan_count, seconds "
@@ -114,6 +127,8 @@ void put_sampling_options(json& j, const CompareSession& session) {
   j["fine_resolution"] = base.light_table.fine_resolution;
   j["peak_ratio"] = base.light_table.peak_ratio;
   j["closed_surfaces"] = scene.proxy_closed_surfaces();
+  j["regularization"] = regularization_json(base.regularization);
+  j["regularized"] = base.regularization.active();
   if (!common.env.empty())
     j["environment_transform"] = {{"rotation_degrees", parse_number("--env-rotation", common.env_rotation)},
                                   {"scale", parse_number("--env-scale", common.env_scale)}};

@@ -47,7 +47,8 @@ const Measured* MeasuredSet::find(render::Strategy s) const {
 ImageMetrics measure_image(const render::RenderResult& r, const Reference& ref, const std::vector<Region>& regions) {
   std::vector<int> ids;
   for (const Region& g : regions) ids.push_back(g.id);
-  return measure(NoisyImage{r.rgb, r.variance}, NoisyImage{ref.rgb, ref.variance}, ref.object_id, ids);
+  return measure(NoisyImage{r.rgb, r.variance, &r.light_variance}, NoisyImage{ref.rgb, ref.variance}, ref.object_id,
+                 ids);
 }
 
 double headline_relmse(const Measured& m) {

@@ -18,14 +18,17 @@ double pixel_rel_sq_error(const float* rgb, const float* ref_rgb) {
 
 namespace {
 
-/// Running sums over one set of pixels.
+/// Running sums over one set of pixels, and its per-pixel errors (for the trimmed mean and the median).
 struct Sums {
   std::size_t n = 0, over = 0;
   double e = 0, e2 = 0, max_e = 0;
   double value = 0, variance = 0, ref_value = 0, ref_variance = 0;
+  double rel_variance = 0, rel_light_variance = 0;  // sums of var / (R^2 + eps), whole and light part
+  std::vector<double> errors;
 
   void add(double err, double v, double var, double ref_v, double ref_var) {
     ++n;
+    errors.push_back(err);
     e += err;
     e2 += err * err;
     max_e = std::max(max_e, err);
@@ -49,6 +52,9 @@ struct Sums {
     if (var > 0) m.z = (value - ref_value) / N / std::sqrt(var);
     m.max_rel_sq_error = max_e;
     m.pixels_over_10x = over;
+    m.relmse_trimmed = trimmed_mean(errors);
+    m.median_rel_sq_error = median(errors);
+    if (rel_variance > 0) m.light_variance_share = rel_light_variance / rel_variance;
     return m;
   }
 };
@@ -68,14 +74,22 @@ ImageMetrics measure(const NoisyImage& image, const NoisyImage& reference, const
   std::vector<Sums> regions(region_ids.size());
   ImageMetrics m;
   m.per_pixel.resize(npix);
+  const bool light = image.light_variance && image.light_variance->size() == npix;
   for (std::size_t p = 0; p < npix; ++p) {
     const double e = pixel_rel_sq_error(&image.rgb[p * 3], &reference.rgb[p * 3]);
     m.per_pixel[p] = static_cast<float>(e);
     const double v = channel_mean(image.rgb, p), r = channel_mean(reference.rgb, p);
-    all.add(e, v, image.variance[p], r, reference.variance[p]);
+    Sums* region = nullptr;
     if (p < object_id.size())
-      if (auto it = region_of_id.find(object_id[p]); it != region_of_id.end())
-        regions[it->second].add(e, v, image.variance[p], r, reference.variance[p]);
+      if (auto it = region_of_id.find(object_id[p]); it != region_of_id.end()) region = &regions[it->second];
+    for (Sums* s : {&all, region}) {
+      if (!s) continue;
+      s->add(e, v, image.variance[p], r, reference.variance[p]);
+      if (!light) continue;
+      const double scale = 1 / (r * r + kRelEpsilon);  // the relMSE's weight of the pixel's variance
+      s->rel_variance += image.variance[p] * scale;
+      s->rel_light_variance += (*image.light_variance)[p] * scale;
+    }
   }
   m.image = all.finish();
   for (const Sums& s : regions) m.regions.push_back(s.finish());
@@ -90,6 +104,16 @@ double reference_floor(const NoisyImage& reference) {
     total += reference.variance[p] / (R * R + kRelEpsilon);
   }
   return npix ? total / double(npix) : std::nan("");
+}
+
+double trimmed_mean(std::vector<double> e) {
+  if (e.empty()) return std::nan("");
+  const auto k = std::min(e.size() - 1, static_cast<std::size_t>(std::ceil(kTrimShare * double(e.size()))));
+  const std::size_t keep = e.size() - k;
+  std::nth_element(e.begin(), e.begin() + (keep - 1), e.end());  // the `keep` smallest come first
+  double sum = 0;
+  for (std::size_t i = 0; i < keep; ++i) sum += e[i];
+  return sum / double(keep);
 }
 
 double median(std::vector<double> v) {

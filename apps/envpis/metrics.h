@@ -7,6 +7,15 @@
 //   pixels_over_10x   how many pixels have e > 100, i.e. are "more than 10x off" (for a grey pixel:
 //                     |I - R| > 10 sqrt(R^2 + 0.01), about 10 R for R well above 0.1).
 // relMSE alone hides a strategy whose error is a few huge pixels; the last two show that tail.
+// Conversely one caustic pixel can decide relMSE; two figures it cannot decide:
+//   relmse_trimmed    the mean of e without the set's worst ceil(0.1%) pixels (at least one, never all),
+//   median_rel_sq_error  the median of e.
+// And how much of the noise environment sampling can act on at all (docs/assets.md):
+//   light_variance_share  sum over the pixels of var_light / (R^2 + 0.01) over the same sum of the
+//                     pixel's whole variance: the share of the expected relMSE (the variance part of
+//                     it) that comes from light samples, var_light being the variance of the part of
+//                     the pixel the renderer's light samples brought (RenderResult::light_variance).
+//                     Near 0: the error comes from BSDF-sampled paths, no light sampler changes it.
 #pragma once
 
 #include <cstddef>
@@ -20,6 +29,8 @@ namespace envpis::app {
 constexpr double kRelEpsilon = 0.01;
 /// A pixel is more than 10x off when its relative squared error exceeds 10^2.
 constexpr double kTailThreshold = 100;
+/// relmse_trimmed leaves out this share of each pixel set's worst pixels (rounded up).
+constexpr double kTrimShare = 0.001;
 
 /// The relative squared error of one RGB pixel (three floats) against the reference's.
 double pixel_rel_sq_error(const float* rgb, const float* ref_rgb);
@@ -35,6 +46,9 @@ struct PixelSetMetrics {
   double z = kNaN;                 // (mean - reference mean) / sqrt(var + reference var)
   double max_rel_sq_error = kNaN;  // the largest per-pixel relative squared error
   std::size_t pixels_over_10x = 0; // pixels whose relative squared error exceeds kTailThreshold
+  double relmse_trimmed = kNaN;       // relmse without the worst ceil(kTrimShare n) pixels (n - 1 at most)
+  double median_rel_sq_error = kNaN;  // the median per-pixel relative squared error
+  double light_variance_share = kNaN; // see above; NaN without the light variance or a noiseless set
 };
 
 struct ImageMetrics {
@@ -48,6 +62,7 @@ struct ImageMetrics {
 struct NoisyImage {
   const std::vector<float>& rgb;
   const std::vector<float>& variance;
+  const std::vector<float>* light_variance = nullptr;  // of the light samples' part; null: unknown
 };
 
 /// `image` against `reference` (same size); region r is the pixels whose `object_id` is region_ids[r].
@@ -60,5 +75,8 @@ double reference_floor(const NoisyImage& reference);
 
 /// The median of `v` (the mean of the two middle values for an even count); NaN for an empty `v`.
 double median(std::vector<double> v);
+
+/// The mean of `e` without its largest ceil(kTrimShare n) values (at most n - 1 of them); NaN when empty.
+double trimmed_mean(std::vector<double> e);
 
 }  // namespace envpis::app

@@ -171,6 +171,41 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--env-mix", env_mix,
                  "product: fraction of environment-only sampling mixed in, [0, 1] (default: the library's)")
       ->type_name("FLOAT");
+  add_regularization_options(sub);
+}
+
+void SceneOptionArgs::add_regularization_options(CLI::App& sub) {
+  sub.add_option("--clamp-direct", clamp_direct,
+                 "path regularization (Cycles' Clamp Direct): each contribution after at most one surface "
+                 "interaction is scaled so its channel mean is at most X; 0: off")
+      ->type_name("X")
+      ->capture_default_str();
+  sub.add_option("--clamp-indirect", clamp_indirect,
+                 "path regularization (Cycles' Clamp Indirect): the same for every other contribution; 0: off")
+      ->type_name("X")
+      ->capture_default_str();
+  sub.add_option("--caustics", caustics,
+                 "path regularization (Cycles' Reflective / Refractive Caustics): the glossy parts a vertex "
+                 "keeps after a diffuse bounce: reflective,refractive (all: no regularization), reflective, "
+                 "refractive or none")
+      ->type_name("LIST")
+      ->capture_default_str();
+  sub.add_option("--filter-glossy", filter_glossy,
+                 "path regularization (Cycles' Filter Glossy): after BSDF samples of smallest pdf p < X, GGX "
+                 "alpha is raised to at least 0.5 sqrt(1 - p / X); 0: off")
+      ->type_name("X")
+      ->capture_default_str();
+}
+
+void SceneOptionArgs::apply_regularization(RegularizationOptions& r) const {
+  const char* range = ">= 0 (0: off)";
+  r.clamp_direct = static_cast<float>(parse_number_in("--clamp-direct", clamp_direct, 0, 3.0e38, range));
+  r.clamp_indirect = static_cast<float>(parse_number_in("--clamp-indirect", clamp_indirect, 0, 3.0e38, range));
+  r.filter_glossy = static_cast<float>(parse_number_in("--filter-glossy", filter_glossy, 0, 3.0e38, range));
+  with_option("--caustics", [&] {
+    parse_caustics(caustics, &r);
+    return 0;
+  });
 }
 
 void SceneOptionArgs::apply(RenderOptions& o) const {
@@ -183,6 +218,7 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
     throw Error(std::string("--sampler: ") + e.what());
   }
   o.max_depth = static_cast<int>(parse_integer("--max-depth", max_depth, 1, 1024));
+  apply_regularization(o.regularization);
   o.threads = static_cast<int>(parse_integer("--threads", threads, 0, 4096));
   o.light_table.top_resolution = static_cast<int>(parse_integer("--top", top, 1, 256));
   o.light_table.fine_resolution = static_cast<int>(parse_integer("--fine", fine, 0, 16384));

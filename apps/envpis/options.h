@@ -61,16 +61,22 @@ struct SceneOptionArgs {
       cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
   std::string product_cache = "16", product_cache_resolution = "64";
+  // Path regularization (render/regularization.h): Cycles' clamp, caustics and filter glossy; off.
+  std::string clamp_direct = "0", clamp_indirect = "0", caustics = "reflective,refractive", filter_glossy = "0";
 
   explicit SceneOptionArgs(std::string default_integrator) : integrator(std::move(default_integrator)) {}
 
   /// --scene, --env, --env-rotation, --env-scale, --env-orientation, --env-filter.
   void add_scene_options(CLI::App& sub);
   /// --integrator, --heuristic, --sampler, --max-depth, --threads, --top, --oracle-*, --proxy-*, --env-mix,
-  /// --closed-surfaces.
+  /// --closed-surfaces, and the path regularization (--clamp-direct, --clamp-indirect, --caustics,
+  /// --filter-glossy).
   void add_sampling_options(CLI::App& sub);
   /// Parses the sampling options into `o` (throws Error naming the option).
   void apply(render::RenderOptions& o) const;
+  /// --clamp-direct, --clamp-indirect, --caustics, --filter-glossy (part of add_sampling_options).
+  void add_regularization_options(CLI::App& sub);
+  void apply_regularization(render::RegularizationOptions& r) const;
   /// Checks --env-rotation / --env-scale / --env-orientation / --env-filter (throws Error naming the
   /// option; each needs --env).
   EnvironmentMapOptions map_options() const;

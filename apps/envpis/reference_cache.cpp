@@ -76,6 +76,13 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
 
 }  // namespace
 
+json regularization_json(const RegularizationOptions& r) {
+  return {{"clamp_direct", r.clamp_direct},
+          {"clamp_indirect", r.clamp_indirect},
+          {"caustics", caustics_string(r)},
+          {"filter_glossy", r.filter_glossy}};
+}
+
 json reference_key(const SceneOptionArgs& common, const Scene& scene, const RenderOptions& base, Strategy strategy,
                    int spp, std::uint64_t seed) {
   json key;
@@ -93,6 +100,8 @@ json reference_key(const SceneOptionArgs& common, const Scene& scene, const Rend
   key["max_depth"] = base.integrator == IntegratorKind::Path ? base.max_depth : 1;
   key["heuristic"] = to_string(base.heuristic);
   key["sampler"] = to_string(base.sampler);
+  // Regularized references are other images; unregularized keys stay as they were.
+  if (base.regularization.active()) key["regularization"] = regularization_json(base.regularization);
   key["strategy"] = to_string(strategy);
   key["spp"] = spp;
   key["seed"] = seed;

@@ -30,6 +30,9 @@ struct Reference {
 nlohmann::json reference_key(const SceneOptionArgs& common, const render::Scene& scene,
                              const render::RenderOptions& base, render::Strategy strategy, int spp, std::uint64_t seed);
 
+/// The path regularization as JSON (the cache key's and metrics.json's "regularization").
+nlohmann::json regularization_json(const render::RegularizationOptions& r);
+
 /// $ENVPIS_CACHE_DIR, else $XDG_CACHE_HOME/envpis/references, else ~/.cache/envpis/references; empty
 /// when none is set.
 std::string default_cache_dir();

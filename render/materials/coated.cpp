@@ -69,7 +69,8 @@ class CoatedDiffuseLobe final : public Lobe {
     const float s = wo.z > 0 ? 1.0f : -1.0f;
     const Vec3 wo_up = wo * s;
     Vec3 wi;
-    if (uc < coat_probability(wo_up.z)) {
+    const bool from_coat = uc < coat_probability(wo_up.z);
+    if (from_coat) {
       const Vec3 m = microfacet::ggx_sample_visible_normal(wo_up, alpha_, u);
       if (!(dot(wo_up, m) > 0)) return std::nullopt;
       wi = microfacet::reflect(wo_up, m);
@@ -77,36 +78,55 @@ class CoatedDiffuseLobe final : public Lobe {
     } else {
       wi = lobe::sample_cosine_hemisphere(u);
     }
-    return lobe::make_sample(wo, wi * s, eval_up(wo_up, wi), pdf_up(wo_up, wi));
+    auto r = lobe::make_sample(wo, wi * s, eval_up(wo_up, wi), pdf_up(wo_up, wi));
+    if (r) r->diffuse = !from_coat;
+    return r;
   }
 
   float albedo(Vec3 wo) const override {
     if (!microfacet::usable(wo)) return 0.0f;
     const float mu = std::abs(wo.z);
-    return table_.reflection(mu) + (1.0f - table_.reflection(mu)) * base_albedo_.average();
+    return coat_energy(mu) + (1.0f - table_.reflection(mu)) * base_albedo_.average();
   }
 
   void add_to_proxy(BsdfProxy& proxy, Vec3 wo, float weight) const override {
     if (!microfacet::usable(wo)) return;
     const float mu = std::abs(wo.z);
-    proxy.add_reflection(weight * table_.reflection(mu), alpha_);
+    proxy.add_reflection(weight * coat_energy(mu), alpha_);
     proxy.add_diffuse(weight * (1.0f - table_.reflection(mu)) * base_albedo_.average());
   }
 
   std::string name() const override { return "coated_diffuse"; }
 
+  /// The coat is the glossy reflection a LobeFilter widens or removes; the base stays as it is
+  /// (its energy terms keep the original coat's table), as Cycles drops a Principled BSDF's coat
+  /// closure and keeps its diffuse one.
+  bool filtered(const LobeFilter& filter, std::shared_ptr<const Lobe>* changed) const override {
+    const bool coat = coat_ && filter.reflection;
+    const bool widen = coat && filter.min_alpha > alpha_;
+    if (!widen && coat == coat_) return true;
+    auto lobe = std::make_shared<CoatedDiffuseLobe>(*this);
+    if (widen) lobe->alpha_ = filter.min_alpha;
+    lobe->coat_ = coat;
+    *changed = std::move(lobe);
+    return true;
+  }
+
  private:
+  /// The energy the coat reflects for |cos theta_o| = mu (0 when a LobeFilter removed it).
+  float coat_energy(float mu) const { return coat_ ? table_.reflection(mu) : 0.0f; }
+
   /// Probability of sampling the coat for |cos theta_o| = mu: its share of the albedo.
   float coat_probability(float mu) const {
-    const float e = table_.reflection(mu), d = (1.0f - e) * base_albedo_.average();
-    return e + d > 0 ? e / (e + d) : 1.0f;
+    const float e = coat_energy(mu), d = (1.0f - table_.reflection(mu)) * base_albedo_.average();
+    return e + d > 0 ? e / (e + d) : (coat_ ? 1.0f : 0.0f);
   }
 
   Rgb eval_up(Vec3 wo, Vec3 wi) const {
     if (!(wi.z > 0)) return {};
     float cos_h;
     const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
-    const float coat = g > 0 ? microfacet::fresnel_dielectric(cos_h, eta_) * g : 0.0f;
+    const float coat = g > 0 && coat_ ? microfacet::fresnel_dielectric(cos_h, eta_) * g : 0.0f;
     const float t = (1.0f - table_.reflection(wo.z)) * (1.0f - table_.reflection(wi.z));
     return Rgb{coat, coat, coat} + base_scale_ * t;
   }
@@ -120,6 +140,7 @@ class CoatedDiffuseLobe final : public Lobe {
 
   Rgb base_;
   float alpha_, eta_ = 1.0f;
+  bool coat_ = true;  ///< false when a LobeFilter removed the coat's reflection
   float f_int_ = 0;
   Rgb base_scale_;   ///< R (1 - F_int) / (pi (1 - E_avg) (1 - R F_int))
   Rgb base_albedo_;  ///< R (1 - F_int) / (1 - R F_int)

@@ -65,6 +65,16 @@ class ConductorLobe final : public Lobe {
 
   std::string name() const override { return "conductor"; }
 
+  bool filtered(const LobeFilter& filter, std::shared_ptr<const Lobe>* changed) const override {
+    if (!filter.reflection) return false;
+    if (filter.min_alpha > alpha_) {
+      auto wide = std::make_shared<ConductorLobe>(*this);
+      wide->alpha_ = filter.min_alpha;
+      *changed = std::move(wide);
+    }
+    return true;
+  }
+
  private:
   Rgb fresnel(float c) const {
     if (complex_)

@@ -51,6 +51,7 @@ class DielectricLobe final : public Lobe {
     if (index_matched(eta_)) {
       eta_ = eta_ >= 1.0f ? 1.01f : 0.99f;
       alpha_ = microfacet::kMinAlpha;
+      index_matched_ = true;
     }
     const float e = eta_;
     outside_ = microfacet::AlbedoTable::build(
@@ -95,7 +96,7 @@ class DielectricLobe final : public Lobe {
   float albedo(Vec3 wo) const override {
     if (!microfacet::usable(wo)) return 0.0f;
     const microfacet::AlbedoTable& t = wo.z > 0 ? outside_ : inside_;
-    return t.reflection(wo.z) + t.transmission(wo.z) * tint_.average();
+    return reflected(t, wo.z) + transmitted(t, wo.z);
   }
 
   /// Reflection and refraction lobes with their single-scattering energies as weights; the proxy
@@ -103,11 +104,26 @@ class DielectricLobe final : public Lobe {
   void add_to_proxy(BsdfProxy& proxy, Vec3 wo, float weight) const override {
     if (!microfacet::usable(wo)) return;
     const microfacet::AlbedoTable& t = wo.z > 0 ? outside_ : inside_;
-    proxy.add_reflection(weight * t.reflection(wo.z), alpha_);
-    proxy.add_refraction(weight * t.transmission(wo.z) * tint_.average(), alpha_, eta_);
+    proxy.add_reflection(weight * reflected(t, wo.z), alpha_);
+    proxy.add_refraction(weight * transmitted(t, wo.z), alpha_, eta_);
   }
 
   std::string name() const override { return "dielectric"; }
+
+  /// Without reflection (or refraction) the lobe keeps the other part alone, sampled alone. An
+  /// index-matched interface keeps its sharpness: widened, the invisible interface would show.
+  bool filtered(const LobeFilter& filter, std::shared_ptr<const Lobe>* changed) const override {
+    const bool reflect = reflect_ && filter.reflection, refract = refract_ && filter.refraction;
+    if (!reflect && !refract) return false;
+    const bool widen = filter.min_alpha > alpha_ && !index_matched_;
+    if (!widen && reflect == reflect_ && refract == refract_) return true;
+    auto lobe = std::make_shared<DielectricLobe>(*this);
+    if (widen) lobe->alpha_ = filter.min_alpha;
+    lobe->reflect_ = reflect;
+    lobe->refract_ = refract;
+    *changed = std::move(lobe);
+    return true;
+  }
 
   float eta() const { return eta_; }
 
@@ -126,14 +142,24 @@ class DielectricLobe final : public Lobe {
     return true;
   }
 
-  /// Probability of reflecting off a microfacet of Fresnel reflectance f.
+  /// The energies of the two parts (0 for a part a LobeFilter removed).
+  float reflected(const microfacet::AlbedoTable& t, float mu) const { return reflect_ ? t.reflection(mu) : 0.0f; }
+  float transmitted(const microfacet::AlbedoTable& t, float mu) const {
+    return refract_ ? t.transmission(mu) * tint_.average() : 0.0f;
+  }
+
+  /// Probability of reflecting off a microfacet of Fresnel reflectance f (the part that is left when
+  /// a LobeFilter removed the other).
   float reflect_probability(float f) const {
+    if (!refract_) return 1.0f;
+    if (!reflect_) return 0.0f;
     const float d = f + (1.0f - f) * tint_.average();
     return d > 0 ? f / d : 1.0f;
   }
 
   /// f for wo above the surface; eta = n_below / n_above.
   Rgb eval_up(Vec3 wo, Vec3 wi, float eta) const {
+    if (wi.z > 0 ? !reflect_ : !refract_) return {};
     if (wi.z > 0) {
       float cos_h;
       const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
@@ -173,6 +199,8 @@ class DielectricLobe final : public Lobe {
 
   float alpha_, eta_;
   Rgb tint_;
+  bool index_matched_ = false;
+  bool reflect_ = true, refract_ = true;  ///< the parts a LobeFilter left
   microfacet::AlbedoTable outside_, inside_;
 };
 

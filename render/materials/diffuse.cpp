@@ -22,7 +22,9 @@ class DiffuseLobe final : public Lobe {
     if (!microfacet::usable(wo)) return std::nullopt;
     Vec3 wi = lobe::sample_cosine_hemisphere(u);
     if ((wo.z < 0) != transmits_) wi.z = -wi.z;
-    return lobe::make_sample(wo, wi, eval(wo, wi), pdf(wo, wi));
+    auto s = lobe::make_sample(wo, wi, eval(wo, wi), pdf(wo, wi));
+    if (s) s->diffuse = true;
+    return s;
   }
 
   float albedo(Vec3 wo) const override { return microfacet::usable(wo) ? c_.average() : 0.0f; }

@@ -109,7 +109,19 @@ std::optional<BsdfSample> Material::sample(Vec3 wo, Point2 u, float uc) const {
     const float pj = sel.probability(j);
     if (pj > 0) p += pj * (j == k ? s->pdf : lobes_[j].lobe->pdf(wo, s->wi));
   }
-  return lobe::make_sample(wo, s->wi, f, p);
+  auto r = lobe::make_sample(wo, s->wi, f, p);
+  if (r) r->diffuse = s->diffuse;
+  return r;
+}
+
+void Material::filter_into(const LobeFilter& filter, Material* out) const {
+  out->clear_lobes();
+  out->closed_surface_ = closed_surface_;
+  for (const Entry& e : lobes_) {
+    std::shared_ptr<const Lobe> changed;
+    if (!e.lobe->filtered(filter, &changed)) continue;
+    out->lobes_.push_back({changed ? std::move(changed) : e.lobe, e.weight, e.weight_average});
+  }
 }
 
 float Material::albedo(Vec3 wo) const {

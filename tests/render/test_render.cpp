@@ -675,6 +675,10 @@ TEST(Command, RejectsBadOptionsWithOneLineErrors) {
       {"--env-filter nearest --out " + out, "--env-filter needs --env"},
       {"--env x.exr --env-orientation mirrored --out " + out, "--env-orientation: unknown lat-long orientation"},
       {"--env x.exr --env-filter cubic --out " + out, "--env-filter: unknown map filter 'cubic'"},
+      {"--clamp-direct -0.5 --out " + out, "--clamp-direct: must be >= 0 (0: off), got '-0.5'"},
+      {"--clamp-indirect nan --out " + out, "--clamp-indirect: expected a finite number, got 'nan'"},
+      {"--filter-glossy -1 --out " + out, "--filter-glossy: must be >= 0 (0: off), got '-1'"},
+      {"--caustics glass --out " + out, "--caustics: unknown caustics 'glass'"},
   };
   std::vector<std::pair<std::string, std::string>> render_cases;
   for (const auto& [args, expect] : cases) render_cases.emplace_back("render " + args, expect);
