@@ -18,7 +18,8 @@ constexpr float kIorOctaves = 4.0f;  // IOR clamped to [2^-4, 2^4]
 std::uint64_t lattice_point(Vec3 d, int k) {
   const Vec3 u = normalize(d);
   const float K = float(k);
-  auto field = [&](float c) { return std::uint64_t(std::lround(c * K) + k) & 0x1fff; };
+  // c K + K + 1/2 >= 0, so the conversion's truncation rounds to nearest (lround is a library call).
+  auto field = [&](float c) { return std::uint64_t(c * K + K + 0.5f) & 0x1fff; };
   return field(u.x) | field(u.y) << 13 | field(u.z) << 26;
 }
 Vec3 lattice_direction(std::uint64_t p, int k) {
@@ -31,12 +32,12 @@ float finite_weight(float w) { return std::isfinite(w) && w > 0 ? w : 0.0f; }
 // A lobe weight as a fraction of the sum in 1/255 steps; a positive weight keeps at least one step.
 std::uint32_t weight_steps(float w, float sum) {
   if (!(w > 0)) return 0;
-  return static_cast<std::uint32_t>(std::clamp(std::lround(w / sum * kSteps), 1L, long(kSteps)));
+  return std::clamp(static_cast<std::uint32_t>(w / sum * kSteps + 0.5f), 1u, static_cast<std::uint32_t>(kSteps));
 }
 
 std::uint32_t alpha_steps(float alpha) {
   const float a = std::isfinite(alpha) ? std::clamp(alpha, 0.0f, 1.0f) : 1.0f;
-  return static_cast<std::uint32_t>(std::lround(std::sqrt(a) * kSteps));
+  return static_cast<std::uint32_t>(std::sqrt(a) * kSteps + 0.5f);
 }
 float alpha_of(std::uint32_t steps) {
   const float s = float(steps) / kSteps;
@@ -46,7 +47,7 @@ float alpha_of(std::uint32_t steps) {
 std::uint32_t ior_steps(float ior) {
   const float e = std::isfinite(ior) && ior > 0 ? std::log2(ior) : 0.0f;
   const float c = std::clamp(e, -kIorOctaves, kIorOctaves);
-  return static_cast<std::uint32_t>(std::lround((c + kIorOctaves) * kIorStepsPerOctave));
+  return static_cast<std::uint32_t>((c + kIorOctaves) * kIorStepsPerOctave + 0.5f);
 }
 float ior_of(std::uint32_t steps) { return std::exp2(float(steps) / kIorStepsPerOctave - kIorOctaves); }
 
@@ -75,8 +76,10 @@ ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy, Rou
   const float sum = w[0] + w[1] + w[2] + w[3];
   std::uint32_t q[4] = {};
   for (int i = 0; i < 4; ++i) q[i] = sum > 0 && std::isfinite(sum) ? weight_steps(w[i], sum) : 0;
-  const std::uint32_t ar = alpha_steps(proxy.alpha_reflection), at = alpha_steps(proxy.alpha_refraction);
-  const std::uint32_t ior = ior_steps(proxy.ior);
+  // A lobe's roughness (and the refraction's IOR) only count when the lobe does: one key for the rest.
+  const std::uint32_t ar = q[2] ? alpha_steps(proxy.alpha_reflection) : 0;
+  const std::uint32_t at = q[3] ? alpha_steps(proxy.alpha_refraction) : 0;
+  const std::uint32_t ior = q[3] ? ior_steps(proxy.ior) : ior_steps(1.0f);
   k.proxy = std::uint64_t(q[0]) | std::uint64_t(q[1]) << 8 | std::uint64_t(q[2]) << 16 | std::uint64_t(q[3]) << 24 |
             std::uint64_t(ar) << 32 | std::uint64_t(at) << 40 | std::uint64_t(ior) << 48;
 
