@@ -92,6 +92,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
                                 options.light_table);
     own->product_cache = options.product_cache;
+    own->product_depth = options.product_depth;
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }

@@ -51,6 +51,7 @@ struct RenderOptions {
   ProductSamplerOptions product;
   /// product: the shared prepared distributions (StrategyTables::product_cache; entries 0: off).
   ProductCacheOptions product_cache;
+  int product_depth = 0;  ///< StrategyTables::product_depth
   /// The light tables (env, mis, mis-comp, product; see StrategyTables::light_table): top resolution
   /// 1..256 (the paper's 12), fine resolution (0: from the map), the peak bound (0: off).
   ImportanceTableOptions light_table;

@@ -91,6 +91,7 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
 LightSampler::LightSampler(const StrategyTables& tables)
     : strategy_(tables.strategy), table_(tables.table.get()) {
   if (strategy_ == Strategy::Product && table_) {
+    product_depth_ = tables.product_depth;
     if (tables.product_cache.entries > 0) {
       product_first_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
       product_deeper_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
@@ -107,7 +108,9 @@ LightSampler::~LightSampler() = default;
 
 void LightSampler::prepare(const ShadingContext& sc) {
   if (strategy_ == Strategy::Product) {
+    product_ = nullptr;
     if (!product_exact_ && !product_first_) return;
+    if (product_depth_ > 0 && sc.depth >= product_depth_) return;  // the table's distribution, as mis
     BsdfProxy proxy;
     sc.bsdf->fill_proxy(proxy, sc.wo_local);
     if (sc.cos_bent < 1) {
@@ -139,7 +142,7 @@ DirectionSample LightSampler::sample(Point2 u) const {
     case Strategy::Env:
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->sample(u) : DirectionSample{};
-    case Strategy::Product: return product_ ? product_->sample(u) : DirectionSample{};
+    case Strategy::Product: return product_ ? product_->sample(u) : table_ ? table_->sample(u) : DirectionSample{};
     case Strategy::Oracle: return oracle_ ? oracle_->sample(u) : DirectionSample{};
   }
   return {};
@@ -151,7 +154,7 @@ float LightSampler::pdf(Vec3 wi) const {
     case Strategy::Env:
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->pdf(wi) : 0.0f;
-    case Strategy::Product: return product_ ? product_->pdf(wi) : 0.0f;
+    case Strategy::Product: return product_ ? product_->pdf(wi) : table_ ? table_->pdf(wi) : 0.0f;
     case Strategy::Oracle: return oracle_ ? oracle_->pdf(wi) : 0.0f;
   }
   return 0;

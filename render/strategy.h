@@ -68,6 +68,9 @@ struct StrategyTables {
   /// one cache for first hits and one for deeper vertices (so that incoherent deeper vertices do not
   /// evict the first hits' samplers); entries 0: prepare each shading point exactly.
   ProductCacheOptions product_cache;
+  /// product: the product distribution at path vertices of depth < product_depth (0: at every vertex),
+  /// the environment table's (as mis) deeper. A function of the vertex, so its MIS weights are exact.
+  int product_depth = 0;
   double build_seconds = 0;
 
   /// The options of the light table of env, mis, mis-comp and product (the oracle's table takes its
@@ -132,6 +135,7 @@ class LightSampler {
   std::unique_ptr<ProductSampler> product_exact_;                 // without a cache
   std::unique_ptr<ProductCache> product_first_, product_deeper_;  // with one
   const ProductSampler* product_ = nullptr;                      // the current shading point's
+  int product_depth_ = 0;
   std::unique_ptr<OracleSampler> oracle_;
 };
 

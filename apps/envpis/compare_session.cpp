@@ -41,6 +41,7 @@ const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
                                                           base.light_table))
              .first;
     it->second.product_cache = base.product_cache;
+    it->second.product_depth = base.product_depth;
   }
   return it->second;
 }

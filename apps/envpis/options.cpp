@@ -159,6 +159,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "point exactly")
       ->type_name("N")
       ->capture_default_str();
+  sub.add_option("--product-depth", product_depth,
+                 "product: the product distribution at the first D vertices of a path, the environment "
+                 "table's (as mis) deeper; 0: at every vertex. 0..1024")
+      ->type_name("D")
+      ->capture_default_str();
   sub.add_option("--product-cache-resolution", product_cache_resolution,
                  "product with --product-cache: K, the normal's and the view's components are rounded to "
                  "multiples of 1/K (a direction moves by at most 0.87 / K radians), 1..4095")
@@ -263,6 +268,7 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   // reaches); with moments a lower one pays under MIS (docs/refinement.md), unless --proxy-min-alpha.
   if (proxy_min_alpha.empty() && o.product.cell_estimate == CellEstimate::Moments) o.product.proxy.min_alpha = 0.2f;
   o.product_cache.entries = static_cast<int>(parse_integer("--product-cache", product_cache, 0, 1024));
+  o.product_depth = static_cast<int>(parse_integer("--product-depth", product_depth, 0, 1024));
   o.product_cache.resolution =
       static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
   if (!env_floor.empty())

@@ -72,6 +72,7 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
     key["cell_estimate"] = to_string(base.product.cell_estimate);
   if (strategy == Strategy::Product && base.product_cache.entries > 0)  // its size changes speed, not images
     key["product_cache_resolution"] = base.product_cache.resolution;
+  if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
 }
 
 }  // namespace

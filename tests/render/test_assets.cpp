@@ -501,24 +501,37 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
   std::vector<Strategy> strategies;
   for (Strategy s : all_strategies())
     if (s != Strategy::Env) strategies.push_back(s);
-  const int tests = static_cast<int>(strategies.size() * objects.size());
+  const int tests = static_cast<int>((strategies.size() + 2) * objects.size());
   const double alpha = 1e-3 / tests;
   double z_max = 0;
   for (double lo = 0, hi = 10, i = 0; i < 100; ++i, z_max = lo) {
     const double mid = 0.5 * (lo + hi);
     (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
   }
-  for (Strategy s : strategies) {
-    const int spp = s == Strategy::Oracle ? 32 : 128;
-    const RenderResult r = render(scene, options(s, spp, 42));
-    ASSERT_EQ(r.nonfinite_pixels, 0u) << to_string(s);
+  // Every strategy, then product's variants: without the product cache, and with the product
+  // distribution at the first vertex only (the table's beyond).
+  struct Variant {
+    Strategy strategy;
+    int cache_entries, product_depth;
+    std::string label;
+  };
+  std::vector<Variant> variants;
+  for (Strategy s : strategies) variants.push_back({s, 16, 0, to_string(s)});
+  variants.push_back({Strategy::Product, 0, 0, "product, no cache"});
+  variants.push_back({Strategy::Product, 16, 1, "product at depth 0 only"});
+  for (const Variant& v : variants) {
+    RenderOptions o = options(v.strategy, v.strategy == Strategy::Oracle ? 32 : 128, 42);
+    o.product_cache.entries = v.cache_entries;
+    o.product_depth = v.product_depth;
+    const RenderResult r = render(scene, o);
+    ASSERT_EQ(r.nonfinite_pixels, 0u) << v.label;
     const auto m = object_means(r, n);
-    const auto& ref = s == Strategy::Mis ? ref_product : ref_mis;
+    const auto& ref = v.strategy == Strategy::Mis ? ref_product : ref_mis;
     for (int i : objects) {
       const double se = std::sqrt(m[i].variance + ref[i].variance);
       ASSERT_GT(se, 0.0);
       const double z = (m[i].mean - ref[i].mean) / se;
-      EXPECT_LT(std::fabs(z), z_max) << to_string(s) << " object " << scene.objects()[i].name << ": mean " << m[i].mean
+      EXPECT_LT(std::fabs(z), z_max) << v.label << " object " << scene.objects()[i].name << ": mean " << m[i].mean
                                      << " vs reference " << ref[i].mean;
     }
   }
