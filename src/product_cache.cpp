@@ -66,7 +66,7 @@ ProductCache::ProductCache(const ImportanceTable& table, const ProductSamplerOpt
   last_use_.assign(samplers_.size(), 0);
 }
 
-ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy, Rounded* rounded) const {
+ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
   Key k;
   k.n = lattice_point(n, options_.resolution);
   k.wo = lattice_point(wo, options_.resolution);
@@ -82,27 +82,28 @@ ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy, Rou
   const std::uint32_t ior = q[3] ? ior_steps(proxy.ior) : ior_steps(1.0f);
   k.proxy = std::uint64_t(q[0]) | std::uint64_t(q[1]) << 8 | std::uint64_t(q[2]) << 16 | std::uint64_t(q[3]) << 24 |
             std::uint64_t(ar) << 32 | std::uint64_t(at) << 40 | std::uint64_t(ior) << 48;
-
-  if (!rounded) return k;
-  // The rounded point from the key alone.
-  rounded->n = lattice_direction(k.n, options_.resolution);
-  rounded->wo = lattice_direction(k.wo, options_.resolution);
-  BsdfProxy& p = rounded->proxy;
-  p = BsdfProxy{};
-  p.diffuse = float(q[0]) / kSteps;
-  p.translucent = float(q[1]) / kSteps;
-  p.reflection = float(q[2]) / kSteps;
-  p.refraction = float(q[3]) / kSteps;
-  p.alpha_reflection = alpha_of(ar);
-  p.alpha_refraction = alpha_of(at);
-  p.ior = ior_of(ior);
   return k;
 }
 
-ProductCache::Rounded ProductCache::round(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
+ProductCache::Rounded ProductCache::rounded(const Key& k) const {
+  auto field = [&](int shift) { return static_cast<std::uint32_t>((k.proxy >> shift) & 0xff); };
   Rounded r;
-  if (is_valid_direction(n) && is_valid_direction(wo)) key(n, wo, proxy, &r);
+  r.n = lattice_direction(k.n, options_.resolution);
+  r.wo = lattice_direction(k.wo, options_.resolution);
+  BsdfProxy& p = r.proxy;
+  p.diffuse = float(field(0)) / kSteps;
+  p.translucent = float(field(8)) / kSteps;
+  p.reflection = float(field(16)) / kSteps;
+  p.refraction = float(field(24)) / kSteps;
+  p.alpha_reflection = alpha_of(field(32));
+  p.alpha_refraction = alpha_of(field(40));
+  p.ior = ior_of(static_cast<std::uint32_t>(k.proxy >> 48));
   return r;
+}
+
+ProductCache::Rounded ProductCache::round(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
+  if (!is_valid_direction(n) || !is_valid_direction(wo)) return {};
+  return rounded(key(n, wo, proxy));
 }
 
 const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
@@ -110,7 +111,7 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
     invalid_.prepare(n, wo, proxy);  // only invalidates
     return invalid_;
   }
-  const Key k = key(n, wo, proxy, nullptr);
+  const Key k = key(n, wo, proxy);
   ++clock_;
   std::size_t oldest = 0;
   for (std::size_t i = 0; i < keys_.size(); ++i) {
@@ -124,8 +125,7 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
   ++misses_;
   keys_[oldest] = k;
   last_use_[oldest] = clock_;
-  Rounded r;
-  key(n, wo, proxy, &r);
+  const Rounded r = rounded(k);  // from the key alone, so a point's distribution is its key's
   samplers_[oldest].prepare(r.n, r.wo, r.proxy);
   return samplers_[oldest];
 }

@@ -63,7 +63,8 @@ class ProductCache {
     std::uint64_t n = 0, wo = 0, proxy = 0;
     bool operator==(const Key& o) const { return n == o.n && wo == o.wo && proxy == o.proxy; }
   };
-  Key key(Vec3 n, Vec3 wo, const BsdfProxy& proxy, Rounded* rounded) const;
+  Key key(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const;
+  Rounded rounded(const Key& k) const;  // the point a key stands for
 
   ProductCacheOptions options_;
   std::vector<ProductSampler> samplers_;
