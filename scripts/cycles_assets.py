@@ -63,25 +63,9 @@ def parse_args(argv):
     a = p.parse_args(argv)
     a.scenes = [resolve_scene(s) for s in C.parse_list(a.scenes, str, "--scenes")]
     a.maps = [C.resolve_map(m) for m in C.parse_list(a.maps, str, "--maps")]
-    a.spp = C.parse_list(a.spp, int, "--spp")
-    if any(s < 1 for s in a.spp) or a.spp != sorted(set(a.spp)):
-        raise Failure("--spp: positive integers in ascending order, got %s" % ",".join(map(str, a.spp)))
-    a.ref_spp = a.ref_spp or 16 * a.spp[-1]
-    if a.ref_spp < a.spp[-1]:
-        raise Failure("--ref-spp (%d) must be at least the largest --spp (%d)" % (a.ref_spp, a.spp[-1]))
-    for name, lo, hi in (("seeds", 1, 64), ("width", 8, 4096), ("height", 8, 4096), ("max_depth", 1, 64),
-                         ("threads", 1, 1024)):
-        if not lo <= getattr(a, name) <= hi:
-            raise Failure("--%s: must be in %d..%d, got %d" % (name.replace("_", "-"), lo, hi, getattr(a, name)))
-    a.strategies = C.parse_list(a.strategies, str, "--strategies")
-    for s in a.strategies + [a.ref_strategy]:
-        if s not in STRATEGIES:
-            raise Failure("unknown envpis strategy '%s' (%s)" % (s, ", ".join(STRATEGIES)))
-    if a.sampler not in ("sobol", "independent"):
-        raise Failure("--sampler: sobol or independent, got '%s'" % a.sampler)
-    if not (os.path.isfile(a.envpis) and os.access(a.envpis, os.X_OK)):
-        raise Failure("no envpis binary at '%s' (build it: cmake --build build --target envpis_cmd, or --envpis)"
-                      % a.envpis)
+    for name, lo, hi in (("seeds", 1, 64), ("width", 8, 4096), ("height", 8, 4096), ("max_depth", 1, 64)):
+        C.check_range(a, name, lo, hi)
+    C.check_envpis_args(a)
     return a
 
 

@@ -370,18 +370,9 @@ def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     a = parse_args(argv)
     width = build(a)
-    sc = bpy.context.scene
     print("cycles_assets_scene.py: scene %s, map %s (%d texels wide), %dx%d, max bounces %d, %d threads"
           % (a["scene"], a["map"], width, a["width"], a["height"], a["max_depth"] - 1, a["threads"]))
-    for spp, seed, path in a["renders"]:
-        sc.cycles.samples = spp
-        sc.cycles.seed = seed
-        sc.render.filepath = os.path.abspath(path)
-        bpy.ops.render.render(write_still=True)
-        if not os.path.isfile(sc.render.filepath):
-            fail("Blender did not write '%s'" % path)
-        print("cycles_assets_scene.py: wrote %s (%d spp, seed %d)" % (path, spp, seed))
-        sys.stdout.flush()
+    CS.render_all(a["renders"], "cycles_assets_scene.py")
 
 
 if __name__ == "__main__":

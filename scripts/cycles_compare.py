@@ -79,7 +79,7 @@ def parse_args(argv):
     p.add_argument("--size", type=int, default=256, help="image side in pixels (default 256)")
     p.add_argument("--spp", default="1,4,16,64,256", help="measured samples per pixel, ascending")
     p.add_argument("--seeds", type=int, default=3, help="renders per spp, seeds 0 .. K-1 (default 3)")
-    p.add_argument("--ref-spp", type=int, default=4096, help="samples per pixel of each reference (default 4096)")
+    p.add_argument("--ref-spp", type=int, default=4096, help="samples per pixel of each reference (default 4096; 0: 16 x the largest --spp)")
     p.add_argument("--strategies", default="bsdf,mis,mis-comp,product",
                    help="envpis strategies (default bsdf,mis,mis-comp,product)")
     p.add_argument("--sampler", default="sobol", help="envpis --sampler (default sobol)")
@@ -100,17 +100,27 @@ def parse_args(argv):
     for r in a.roughness:
         if not 0 < r <= 1:
             raise Failure("--roughness: each value must be in (0, 1], got %g" % r)
+    for name, lo, hi in (("seeds", 1, 64), ("size", 8, 4096)):
+        check_range(a, name, lo, hi)
+    check_envpis_args(a)
+    return a
+
+
+def check_range(a, name, lo, hi):
+    if not lo <= getattr(a, name) <= hi:
+        raise Failure("--%s: must be in %d..%d, got %d" % (name.replace("_", "-"), lo, hi, getattr(a, name)))
+
+
+def check_envpis_args(a):
+    """The options both side-by-sides share: --spp (a list), --ref-spp (0: 16 x the largest spp),
+    --threads, --strategies, --ref-strategy, --sampler and the envpis binary."""
     a.spp = parse_list(a.spp, int, "--spp")
     if any(s < 1 for s in a.spp) or a.spp != sorted(set(a.spp)):
         raise Failure("--spp: positive integers in ascending order, got %s" % ",".join(map(str, a.spp)))
-    if not 1 <= a.seeds <= 64:
-        raise Failure("--seeds: must be in 1..64, got %d" % a.seeds)
-    if not 8 <= a.size <= 4096:
-        raise Failure("--size: must be in 8..4096, got %d" % a.size)
+    a.ref_spp = a.ref_spp or 16 * a.spp[-1]
     if a.ref_spp < a.spp[-1]:
         raise Failure("--ref-spp (%d) must be at least the largest --spp (%d)" % (a.ref_spp, a.spp[-1]))
-    if not 1 <= a.threads <= 1024:
-        raise Failure("--threads: must be in 1..1024, got %d" % a.threads)
+    check_range(a, "threads", 1, 1024)
     a.strategies = parse_list(a.strategies, str, "--strategies")
     for s in a.strategies + [a.ref_strategy]:
         if s not in STRATEGIES:
@@ -120,7 +130,6 @@ def parse_args(argv):
     if not (os.path.isfile(a.envpis) and os.access(a.envpis, os.X_OK)):
         raise Failure("no envpis binary at '%s' (build it: cmake --build build --target envpis_cmd, or --envpis)"
                       % a.envpis)
-    return a
 
 
 def resolve_map(name):

@@ -211,17 +211,22 @@ def main():
     camera(args["ortho_height"])
     width = world(args["map"])
     settings(args["size"], args["threads"], args["pattern"], args["max_bounces"])
-    sc = bpy.context.scene
     print("cycles_scene.py: map %s (%d texels wide), roughness %g, %dx%d, %d threads, pattern %s"
           % (args["map"], width, args["roughness"], args["size"], args["size"], args["threads"], args["pattern"]))
-    for spp, seed, path in args["renders"]:
+    render_all(args["renders"], "cycles_scene.py")
+
+
+def render_all(renders, who):
+    """Renders the scene once per (spp, seed, path), each written as an EXR at path."""
+    sc = bpy.context.scene
+    for spp, seed, path in renders:
         sc.cycles.samples = spp
         sc.cycles.seed = seed
         sc.render.filepath = os.path.abspath(path)
         bpy.ops.render.render(write_still=True)
         if not os.path.isfile(sc.render.filepath):
             fail("Blender did not write '%s'" % path)
-        print("cycles_scene.py: wrote %s (%d spp, seed %d)" % (path, spp, seed))
+        print("%s: wrote %s (%d spp, seed %d)" % (who, path, spp, seed))
         sys.stdout.flush()
 
 
