@@ -51,6 +51,20 @@ RowInput row_input(py::handle obj, const char* name, py::ssize_t cols) {
   return in;
 }
 
+envpis::Vec3 vec3(py::handle obj, const char* name) {
+  bool single = false;
+  const FloatArray a = rows(obj, name, 3, true, &single);
+  if (!single && a.shape(0) != 1) throw py::value_error(std::string(name) + " must be 3 numbers");
+  return {a.data()[0], a.data()[1], a.data()[2]};
+}
+
+py::array_t<float> vec3_array(envpis::Vec3 v) {
+  py::array_t<float> out(3);
+  float* o = out.mutable_data();
+  o[0] = v.x, o[1] = v.y, o[2] = v.z;
+  return out;
+}
+
 py::array_t<float> new_array(py::ssize_t n) { return py::array_t<float>(n); }
 py::array_t<float> new_array(py::ssize_t n, py::ssize_t cols) {
   return py::array_t<float>({n, cols});

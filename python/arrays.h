@@ -35,6 +35,10 @@ struct RowInput {
 };
 RowInput row_input(py::handle obj, const char* name, py::ssize_t cols);
 
+/// Exactly 3 numbers (or a 1 x 3 array) as a vector; ValueError otherwise.
+envpis::Vec3 vec3(py::handle obj, const char* name);
+py::array_t<float> vec3_array(envpis::Vec3 v);
+
 /// Fresh float32 arrays for results.
 py::array_t<float> new_array(py::ssize_t n);
 py::array_t<float> new_array(py::ssize_t n, py::ssize_t cols);

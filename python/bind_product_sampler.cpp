@@ -13,17 +13,8 @@ namespace {
 using envpis::ProductSampler;
 using envpis::ProductSamplerOptions;
 
-envpis::Vec3 vec3(py::handle obj, const char* name) {
-  bool single = false;
-  const FloatArray a = rows(obj, name, 3, true, &single);
-  if (!single && a.shape(0) != 1) throw py::value_error(std::string(name) + " must be 3 numbers");
-  return {a.data()[0], a.data()[1], a.data()[2]};
-}
-
 bool prepare(ProductSampler& s, py::handle n, py::handle wo, py::handle proxy) {
-  const RowInput p = proxy_rows(proxy);
-  if (p.count != 1) throw py::value_error("proxy must be one BsdfProxy or 7 numbers");
-  return s.prepare(vec3(n, "normal"), vec3(wo, "wo"), proxy_from_row(p.row(0)));
+  return s.prepare(vec3(n, "normal"), vec3(wo, "wo"), one_proxy(proxy));
 }
 
 py::tuple sample(const ProductSampler& s, py::handle u) {

@@ -61,4 +61,10 @@ RowInput proxy_rows(py::handle obj) {
   return row_input(obj, "proxies", kProxyFloats);
 }
 
+envpis::BsdfProxy one_proxy(py::handle obj) {
+  const RowInput p = proxy_rows(obj);
+  if (p.count != 1) throw py::value_error("proxy must be one BsdfProxy or 7 numbers");
+  return proxy_from_row(p.row(0));
+}
+
 }  // namespace envpis_py

@@ -22,6 +22,9 @@ py::array_t<float> proxy_array(const envpis::BsdfProxy& p);
 /// BsdfProxy, or one BsdfProxy / 7 numbers shared by every point. ValueError otherwise.
 RowInput proxy_rows(py::handle obj);
 
+/// One proxy: a BsdfProxy or 7 numbers; ValueError otherwise.
+envpis::BsdfProxy one_proxy(py::handle obj);
+
 inline envpis::BsdfProxy proxy_from_row(const float* r) {
   envpis::BsdfProxy p;
   p.diffuse = r[0], p.translucent = r[1], p.reflection = r[2], p.refraction = r[3];
