@@ -18,8 +18,9 @@ constexpr float kIorOctaves = 4.0f;  // IOR clamped to [2^-4, 2^4]
 std::uint64_t lattice_point(Vec3 d, int k) {
   const Vec3 u = normalize(d);
   const float K = float(k);
-  // c K + K + 1/2 >= 0, so the conversion's truncation rounds to nearest (lround is a library call).
-  auto field = [&](float c) { return std::uint64_t(c * K + K + 0.5f) & 0x1fff; };
+  // c K + K + 1/2 >= 0, so the conversion's truncation rounds to nearest (lround is a library call);
+  // through int32, which converts in one instruction (uint64 does not without AVX-512).
+  auto field = [&](float c) { return std::uint64_t(static_cast<std::uint32_t>(static_cast<std::int32_t>(c * K + K + 0.5f)) & 0x1fffu); };
   return field(u.x) | field(u.y) << 13 | field(u.z) << 26;
 }
 Vec3 lattice_direction(std::uint64_t p, int k) {
@@ -113,11 +114,17 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
   }
   const Key k = key(n, wo, proxy);
   ++clock_;
+  if (last_use_[last_] != 0 && keys_[last_] == k) {  // consecutive samples of a pixel: the usual hit
+    ++hits_;
+    last_use_[last_] = clock_;
+    return samplers_[last_];
+  }
   std::size_t oldest = 0;
   for (std::size_t i = 0; i < keys_.size(); ++i) {
     if (last_use_[i] != 0 && keys_[i] == k) {
       ++hits_;
       last_use_[i] = clock_;
+      last_ = i;
       return samplers_[i];
     }
     if (last_use_[i] < last_use_[oldest]) oldest = i;
@@ -125,6 +132,7 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
   ++misses_;
   keys_[oldest] = k;
   last_use_[oldest] = clock_;
+  last_ = oldest;
   const Rounded r = rounded(k);  // from the key alone, so a point's distribution is its key's
   samplers_[oldest].prepare(r.n, r.wo, r.proxy);
   return samplers_[oldest];

@@ -36,6 +36,7 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
   if (options.refine && table.subdivision() < 2)
     throw Error("the refined product sampler needs a table with sub-cells (subdivision > 1)");
   refine_ = options.refine;
+  recent_.fill(-1);
   if (refine_) {
     slots_.assign(static_cast<std::size_t>(options.refine_cells) + kRecentCells,
                   DiscreteDistribution2D(table.subdivision(), table.subdivision()));

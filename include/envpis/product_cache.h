@@ -71,6 +71,7 @@ class ProductCache {
   std::vector<Key> keys_;
   std::vector<std::uint64_t> last_use_;  // 0: the slot holds no key yet
   ProductSampler invalid_;               // never prepared with a valid point: for zero or NaN n, wo
+  std::size_t last_ = 0;                 // the slot prepare() returned last
   std::uint64_t clock_ = 0, hits_ = 0, misses_ = 0;
 };
 

@@ -51,6 +51,7 @@
 // sample() and pdf() reuse the sampler's scratch too: one sampler must not be used by two threads.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "envpis/bsdf_proxy.h"
@@ -141,12 +142,12 @@ class ProductSampler : private SubcellLevel {
   float weigh_subcells(int c, DiscreteDistribution2D& out) const;
   void reestimate_heaviest_cells();
   // Sub-cell distributions: one per cell re-estimated in prepare(), then kRecentCells for the cells
-  // sample() and pdf() needed last.
-  static constexpr int kRecentCells = 4;
+  // sample() and pdf() needed last (a glossy lobe's light and BSDF samples spread over a dozen cells).
+  static constexpr int kRecentCells = 16;
   mutable std::vector<DiscreteDistribution2D> slots_;  // refine_cells + kRecentCells
   mutable std::vector<int> slot_of_;                   // per cell: its slot, or -1
   std::vector<int> slotted_;                           // the cells re-estimated in prepare()
-  mutable int recent_[kRecentCells] = {-1, -1, -1, -1};
+  mutable std::array<int, kRecentCells> recent_;  // -1: an empty slot
   mutable int next_recent_ = 0;
   bool refine_ = false;
   bool valid_ = false;
