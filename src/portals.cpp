@@ -25,7 +25,8 @@ Vec3 area_vector(const Quad& q) {
 // Share of a ball on the positive side of a plane at signed distance x (in radii): a smooth estimate
 // of a cone's share on one side of a plane (within 0.04 of the disk's share; see portals.h).
 inline float cut_share(float x) {
-  x = std::min(std::max(x, -1.0f), 1.0f);
+  x = x < -1.0f ? -1.0f : x;
+  x = x > 1.0f ? 1.0f : x;
   return 0.5f + x * (0.75f - 0.25f * x * x);
 }
 
@@ -100,7 +101,10 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
-  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_}) a->assign(padded, 0.0f);
+  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &near_})
+    a->assign(padded, 0.0f);
+  candidates_.assign(padded, 0);
+  for (auto& g : gather_) g.assign(padded, 0.0f);
   for (int c = 0; c < cells; ++c) {
     const Cone& k = table.cell_cone(c);
     ax_[c] = k.axis.x, ay_[c] = k.axis.y, az_[c] = k.axis.z;
@@ -108,6 +112,9 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
     inv_sin_[c] = small ? 1.0f / k.sin_half_angle : 0.0f;
     out_thr_[c] = small ? -(k.sin_half_angle + kMargin) : -2.0f;
     in_thr_[c] = small ? k.sin_half_angle + kMargin : 2.0f;
+    cos_[c] = small ? k.cos_half_angle : 0.0f;
+    sin_[c] = small ? k.sin_half_angle : 0.0f;
+    big_[c] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
   }
   if (options.estimate != PortalEstimate::Grid) return;
   const int K = options.grid;
@@ -141,7 +148,17 @@ bool PortalView::prepare(Vec3 p) {
       if (dot(n, centre) < 0.0f) n = -n;  // the quad's directions on the positive side
       s.n[k][0] = n.x, s.n[k][1] = n.y, s.n[k][2] = n.z;
     }
-    if (ok) seen_.push_back(s);
+    if (!ok) continue;
+    // The bounding cone: around the centre's direction, out to the farthest vertex. A cone wider than
+    // 90 degrees is not convex on the sphere (it might not hold the edges): then every cell is near.
+    const Vec3 g = normalize(centre);
+    float cos_p = 1.0f;
+    for (int k = 0; k < 4; ++k) cos_p = std::min(cos_p, dot(normalize(q.v[k] - p), g));
+    s.g[0] = g.x, s.g[1] = g.y, s.g[2] = g.z;
+    s.cos_p = cos_p;
+    s.sin_p = std::sqrt(std::max(0.0f, 1.0f - cos_p * cos_p));
+    s.wide = !(cos_p > 0.0f);
+    seen_.push_back(s);
   }
   if (seen_.empty()) return false;
   if (options_.estimate == PortalEstimate::Grid)
@@ -153,22 +170,82 @@ bool PortalView::prepare(Vec3 p) {
   return visible_;
 }
 
-// Every top cell against every seen portal, in arrays the compiler vectorizes: four dot products per
-// cell and portal, the classification, the Cone estimate (portals.h).
+// The near cells (candidates_[0, count)) against seen portal s, vectorized: their cones gathered into
+// scratch arrays, the branch-free estimate over those (the compiler vectorizes it with
+// -fno-trapping-math), the shares added back.
+void PortalView::near_cells(const Seen& s, int count) {
+  float* __restrict gx = gather_[0].data();
+  float* __restrict gy = gather_[1].data();
+  float* __restrict gz = gather_[2].data();
+  float* __restrict gk = gather_[3].data();
+  float* __restrict go = gather_[4].data();
+  float* __restrict gi = gather_[5].data();
+  for (int i = 0; i < count; ++i) {
+    const int c = candidates_[i];
+    gx[i] = ax_[c], gy[i] = ay_[c], gz[i] = az_[c], gk[i] = inv_sin_[c], go[i] = out_thr_[c], gi[i] = in_thr_[c];
+  }
+  const float(&m)[4][3] = s.n;
+  const float x0 = m[0][0], y0 = m[0][1], z0 = m[0][2], x1 = m[1][0], y1 = m[1][1], z1 = m[1][2];
+  const float x2 = m[2][0], y2 = m[2][1], z2 = m[2][2], x3 = m[3][0], y3 = m[3][1], z3 = m[3][2];
+  for (int i = 0; i < count; ++i) {
+    const float d0 = gx[i] * x0 + gy[i] * y0 + gz[i] * z0, d1 = gx[i] * x1 + gy[i] * y1 + gz[i] * z1;
+    const float d2 = gx[i] * x2 + gy[i] * y2 + gz[i] * z2, d3 = gx[i] * x3 + gy[i] * y3 + gz[i] * z3;
+    const float lo01 = d0 < d1 ? d0 : d1, lo23 = d2 < d3 ? d2 : d3, lo = lo01 < lo23 ? lo01 : lo23;
+    const float k = gk[i];
+    const float share = cut_share(d0 * k) * cut_share(d1 * k) * cut_share(d2 * k) * cut_share(d3 * k);
+    float own = share > kMinPartial ? share : kMinPartial;
+    own = lo < go[i] ? 0.0f : own;
+    gx[i] = lo >= gi[i] ? 1.0f : own;  // gx: the share now
+  }
+  for (int i = 0; i < count; ++i) {
+    const int c = candidates_[i];
+    v_[c] = std::min(1.0f, v_[c] + gx[i]);
+  }
+}
+
+// One cell against one seen portal: the classification by the minimum of the four dot products
+// (outside one plane: outside; inside all: inside) and the Cone estimate (portals.h).
+inline float PortalView::cone_share(const Seen& s, int c) const {
+  const float(&m)[4][3] = s.n;
+  const float x = ax_[c], y = ay_[c], z = az_[c], k = inv_sin_[c];
+  float lo = 2.0f, share = 1.0f;
+  for (int i = 0; i < 4; ++i) {
+    const float d = x * m[i][0] + y * m[i][1] + z * m[i][2];
+    lo = std::min(lo, d);
+    share *= cut_share(d * k);
+  }
+  if (lo < out_thr_[c]) return 0.0f;
+  return lo >= in_thr_[c] ? 1.0f : std::max(share, kMinPartial);
+}
+
+// Every top cell against every seen portal. Most cells are far from a portal: a first pass, which the
+// compiler vectorizes (branch-free, restrict pointers), keeps the cells whose cone meets the portal's
+// bounding cone, angle(a, g) <= b + b_p, i.e. a . g >= cos b cos b_p - sin b sin b_p; only those get
+// the four planes.
 void PortalView::cone_pass() {
   const int n = table_->cell_count();
-  float* v = v_.data();
+  const float* __restrict ax = ax_.data();
+  const float* __restrict ay = ay_.data();
+  const float* __restrict az = az_.data();
+  const float* __restrict cosb = cos_.data();
+  const float* __restrict sinb = sin_.data();
+  const float* __restrict big = big_.data();
+  float* __restrict near = near_.data();
   for (const Seen& s : seen_) {
-    for (int c = 0; c < n; ++c) {
-      float share = 1.0f, lo = 2.0f;
-      for (int k = 0; k < 4; ++k) {
-        const float d = ax_[c] * s.n[k][0] + ay_[c] * s.n[k][1] + az_[c] * s.n[k][2];
-        lo = std::min(lo, d - in_thr_[c]);  // >= 0 on every plane: inside
-        share *= d < out_thr_[c] ? 0.0f : cut_share(d * inv_sin_[c]);
-      }
-      const float own = lo >= 0.0f ? 1.0f : (share > 0.0f ? std::max(share, kMinPartial) : 0.0f);
-      v[c] = std::min(1.0f, v[c] + own);
+    const float gx = s.g[0], gy = s.g[1], gz = s.g[2], cp = s.cos_p, sp = s.sin_p;
+    if (s.wide) {
+      for (int c = 0; c < n; ++c) v_[c] = std::min(1.0f, v_[c] + cone_share(s, c));
+      continue;
     }
+    for (int c = 0; c < n; ++c)
+      near[c] = ax[c] * gx + ay[c] * gy + az[c] * gz - (cosb[c] * cp - sinb[c] * sp) + big[c] + kMargin;
+    // The near cells' indices, without a branch per cell (they are scattered: a branch mispredicts).
+    int count = 0;
+    for (int c = 0; c < n; ++c) {
+      candidates_[count] = c;
+      count += near[c] >= 0.0f;
+    }
+    near_cells(s, count);
   }
 }
 

@@ -51,18 +51,21 @@ ProductSampler::ProductSampler(const ImportanceTable& table, const ProductSample
 
 Simd ProductSampler::simd() const { return parse_simd(kernels_->name); }
 
-// With a view: the portal-masked environment E[c] V[c] / sum E V into masked_env_; false when it is
-// all zero (the view sees only black cells, or nothing).
+// With a view: the portal-masked environment E[c] V[c] into masked_env_, unnormalized, and
+// 1 / sum E V into masked_scale_; false when it is all zero (the view sees only black cells).
 bool ProductSampler::apply_portals() {
   const int cells = table_->cell_count();
   masked_env_.resize(static_cast<std::size_t>(top_.padded_size()));
   const float* e = table_->top_level().values();
   const float* v = view_->cell_fractions();
-  float sum = 0;
-  for (int c = 0; c < cells; ++c) sum += masked_env_[c] = e[c] * v[c];
+  float part[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // eight running sums: no chain of dependent adds
+  int c = 0;
+  for (; c + 8 <= cells; c += 8)
+    for (int k = 0; k < 8; ++k) part[k] += masked_env_[c + k] = e[c + k] * v[c + k];
+  for (; c < cells; ++c) part[0] += masked_env_[c] = e[c] * v[c];
+  const float sum = ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
   if (!(sum >= std::numeric_limits<float>::min()) || !std::isfinite(sum)) return false;
-  const float a = 1.0f / sum;
-  for (int c = 0; c < cells; ++c) masked_env_[c] *= a;
+  masked_scale_ = 1.0f / sum;
   return true;
 }
 
@@ -105,15 +108,18 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
     m = 1.0f;
   }
   // E[c], or through portals the masked environment: the floor and the mixture then keep V[c] = 0 at 0.
+  // (Unnormalized: every use scales it by es, which is exactly 1 without a view, so that r * es is r.)
   const float* e = view_ ? masked_env_.data() : table_->top_level().values();
+  const float es = view_ ? masked_scale_ : 1.0f;
   if (!fallback_ && options_.env_floor > 0.0f) {  // the environment floor (see product_sampler.h)
-    const float a = 1.0f / sum, r = options_.env_floor;
+    const float a = 1.0f / sum, r = options_.env_floor * es;
     for (int c = 0; c < cells; ++c)
       if (prob[c] > 0.0f) prob[c] = std::max(prob[c] * a, r * e[c]);
     sum = top_.update();
   }
   if (m > 0.0f) {  // defensive mixture with the environment distribution
     const float a = m < 1.0f ? (1.0f - m) / sum : 0.0f;
+    m *= es;
     for (int c = 0; c < cells; ++c) {
       // Not a * prob[c] when a == 0: the fallback after an infinite product weight would give 0 * inf = NaN.
       prob[c] = (a > 0.0f ? a * prob[c] : 0.0f) + m * e[c];

@@ -119,7 +119,11 @@ class PortalView {
   // oriented so that the quad's directions are on their positive side.
   struct Seen {
     float n[4][3];
+    float g[3];        // a bounding cone of the quad's directions: axis, cos and sin of its half-angle
+    float cos_p, sin_p;
+    bool wide;         // wider than 90 degrees: no use as a bound
   };
+  float cone_share(const Seen& s, int c) const;
   // Bit i set: cone not outside seen portal i; `inside`: inside one of them.
   unsigned classify(const Cone& cone, bool& inside) const;
   float cone_fraction(const Cone& cone) const;
@@ -135,6 +139,10 @@ class PortalView {
   std::vector<float> v_;    // V[c], padded like the table's top level
   // The top cells' cones as arrays (axis, 1 / sin, the outside and inside thresholds), for cone_pass.
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
+  std::vector<float> cos_, sin_, big_, near_;
+  std::vector<int> candidates_;
+  std::vector<float> gather_[6];
+  void near_cells(const Seen& s, int count);  // cos / sin of the half-angle, 4 for wide cones; scratch
   std::vector<Vec3> grid_dirs_;  // Grid: K^2 directions per top cell, cell-major
   bool visible_ = false;
 };

@@ -162,7 +162,8 @@ class ProductSampler : private SubcellLevel {
   bool mask_subcells(int c, const float* e, float* w, float* masked) const;
   const DiscreteDistribution2D& portal_subcells(int c) const;
   const PortalView* view_ = nullptr;  // the last prepare()'s portals, or nullptr
-  std::vector<float> masked_env_;     // E[c] V[c] / sum E V (padded), with a view
+  std::vector<float> masked_env_;     // E[c] V[c] (padded), with a view
+  float masked_scale_ = 1;            // 1 / sum E V
   mutable DiscreteDistribution2D portal_sub_;  // not refining, with a view: the last cell's E[s | c] V[s]
   mutable int portal_sub_cell_ = -1;
   // Sub-cell distributions: one per cell re-estimated in prepare(), then kRecentCells for the cells
