@@ -101,7 +101,7 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
-  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &near_})
+  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &near_, &full_})
     a->assign(padded, 0.0f);
   candidates_.assign(padded, 0);
   for (auto& g : gather_) g.assign(padded, 0.0f);
@@ -131,6 +131,7 @@ bool PortalView::prepare(Vec3 p) {
   visible_ = false;
   seen_.clear();
   std::fill(v_.begin(), v_.end(), 0.0f);
+  std::fill(full_.begin(), full_.end(), 0.0f);
   if (!finite(p)) return false;
   for (int i = 0; i < portals_.size(); ++i) {
     const Quad& q = portals_.quad(i);
@@ -161,10 +162,8 @@ bool PortalView::prepare(Vec3 p) {
     seen_.push_back(s);
   }
   if (seen_.empty()) return false;
-  if (options_.estimate == PortalEstimate::Grid)
-    grid_pass();
-  else
-    cone_pass();
+  cone_pass();
+  if (options_.estimate == PortalEstimate::Grid) grid_pass();
   const int cells = table_->cell_count();
   for (int c = 0; c < cells && !visible_; ++c) visible_ = v_[c] > 0.0f;
   return visible_;
@@ -200,6 +199,7 @@ void PortalView::near_cells(const Seen& s, int count) {
   for (int i = 0; i < count; ++i) {
     const int c = candidates_[i];
     v_[c] = std::min(1.0f, v_[c] + gx[i]);
+    if (gx[i] >= 1.0f) full_[c] = 1.0f;  // the portal holds the whole cone (see grid_pass)
   }
 }
 
@@ -234,7 +234,11 @@ void PortalView::cone_pass() {
   for (const Seen& s : seen_) {
     const float gx = s.g[0], gy = s.g[1], gz = s.g[2], cp = s.cos_p, sp = s.sin_p;
     if (s.wide) {
-      for (int c = 0; c < n; ++c) v_[c] = std::min(1.0f, v_[c] + cone_share(s, c));
+      for (int c = 0; c < n; ++c) {
+        const float share = cone_share(s, c);
+        v_[c] = std::min(1.0f, v_[c] + share);
+        if (share >= 1.0f) full_[c] = 1.0f;
+      }
       continue;
     }
     for (int c = 0; c < n; ++c)
@@ -309,13 +313,14 @@ float PortalView::grid_fraction(const Vec3* dirs, int count, unsigned mask) cons
   return std::max(float(hits) / float(count), kMinPartial);
 }
 
+// After cone_pass: the partial cells (V > 0, no portal covering the whole cone) re-estimated from
+// their grid of directions.
 void PortalView::grid_pass() {
   const int n = table_->cell_count(), K2 = options_.grid * options_.grid;
-  for (int c = 0; c < n; ++c) {
-    bool inside = false;
-    const unsigned partial = classify(table_->cell_cone(c), inside);
-    v_[c] = inside ? 1.0f : (partial ? grid_fraction(&grid_dirs_[static_cast<std::size_t>(c) * K2], K2, partial) : 0.0f);
-  }
+  const unsigned all = (1u << seen_.size()) - 1u;
+  for (int c = 0; c < n; ++c)
+    if (v_[c] > 0.0f && !(full_[c] > 0.0f))
+      v_[c] = grid_fraction(&grid_dirs_[static_cast<std::size_t>(c) * K2], K2, all);
 }
 
 bool PortalView::subcell_fractions(int c, float* out) const {

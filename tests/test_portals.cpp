@@ -188,23 +188,36 @@ TEST(Portals, EnvironmentSamplerChiSquareAndIntegral) {
       }
 }
 
+// The product through portals on three set-ups: the paper's one level (S = 1); the refined product
+// (S = 4, refine_cells 4); the unrefined product on the S = 4 table (the sub-cell level is then the
+// portal-masked environment's) with the moments estimate and a defensive mixture.
 TEST(Portals, ProductSamplerChiSquareAndIntegral) {
-  const auto tables = {table(1), table(4)};
-  int k = 0, tests = 2 * 2 * int(scenes().size());
-  for (const auto& t : tables)
+  struct Setup {
+    std::shared_ptr<ImportanceTable> table;
+    ProductSamplerOptions options;
+    std::string label;
+  };
+  std::vector<Setup> setups(3);
+  setups[0] = {table(1), {}, "S=1"};
+  setups[1] = {table(4), {}, "S=4 refined"};
+  setups[1].options.refine = true;
+  setups[1].options.refine_cells = 4;
+  setups[2] = {setups[1].table, {}, "S=4 unrefined, moments, env_mix 0.1"};
+  setups[2].options.cell_estimate = CellEstimate::Moments;
+  setups[2].options.env_mix = 0.1f;
+  int k = 0, tests = 3 * 2 * int(scenes().size());
+  for (const Setup& u : setups)
     for (PortalEstimate est : {PortalEstimate::Cone, PortalEstimate::Grid})
       for (const Scene& s : scenes()) {
-        const std::string label = s.label + " S=" + std::to_string(t->subdivision()) + " " + to_string(est);
-        PortalView view(*t, Portals(s.quads), {est, 4});
+        const ImportanceTable& t = *u.table;
+        const std::string label = s.label + " " + u.label + " " + to_string(est);
+        PortalView view(t, Portals(s.quads), {est, 4});
         ASSERT_TRUE(view.prepare(s.p)) << label;
-        ProductSamplerOptions o;
-        o.refine = t->subdivision() > 1;
-        o.refine_cells = 4;
-        ProductSampler ps(*t, o);
+        ProductSampler ps(t, u.options);
         const Vec3 wo = normalize(s.n + Vec3{0.3f, -0.2f, 0.1f});
         ASSERT_TRUE(ps.prepare(s.n, wo, plastic(), &view)) << label;
         check_samples(ps, view, label);
-        const Chi2Result r = sampler_chi2(ps, options(*t, 900 + k++, tests));
+        const Chi2Result r = sampler_chi2(ps, options(t, 900 + k++, tests));
         EXPECT_TRUE(r.passed) << label << ": " << r.message;
         EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3) << label;
       }

@@ -140,6 +140,7 @@ class PortalView {
   // The top cells' cones as arrays (axis, 1 / sin, the outside and inside thresholds), for cone_pass.
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
   std::vector<float> cos_, sin_, big_, near_;
+  std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
   std::vector<int> candidates_;
   std::vector<float> gather_[6];
   void near_cells(const Seen& s, int count);  // cos / sin of the half-angle, 4 for wide cones; scratch
