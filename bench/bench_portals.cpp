@@ -52,7 +52,9 @@ const std::vector<RoomPoint>& room_points() {
 }
 
 // portals < 0: no portals (the baseline); else that many, with the estimate.
-void product_through_portals(benchmark::State& state, int portals, PortalEstimate estimate) {
+// sample_too false: prepare() alone (the view's and the product's), to tell the weights' cost from the
+// samples' (whose fine-level reads land in other cells through portals: other cache lines).
+void product_through_portals(benchmark::State& state, int portals, PortalEstimate estimate, bool sample_too = true) {
   const ImportanceTable& table = sunset_table();
   const auto& pts = room_points();
   const auto& us = uniform_points();
@@ -71,6 +73,7 @@ void product_through_portals(benchmark::State& state, int portals, PortalEstimat
       v = &view;
     }
     valid += ps.prepare(r.s.n, r.s.wo, r.s.proxy, v);
+    if (!sample_too) continue;
     const DirectionSample d = ps.sample(us[j]);
     benchmark::DoNotOptimize(d);
     benchmark::DoNotOptimize(ps.pdf(ds[j]));
@@ -83,6 +86,10 @@ void product_through_portals(benchmark::State& state, int portals, PortalEstimat
 void BM_PortalProduct_None(benchmark::State& s) { product_through_portals(s, -1, PortalEstimate::Cone); }
 void BM_PortalProduct_Cone(benchmark::State& s) {
   product_through_portals(s, static_cast<int>(s.range(0)), PortalEstimate::Cone);
+}
+void BM_PortalPrepare_None(benchmark::State& s) { product_through_portals(s, -1, PortalEstimate::Cone, false); }
+void BM_PortalPrepare_Cone(benchmark::State& s) {
+  product_through_portals(s, static_cast<int>(s.range(0)), PortalEstimate::Cone, false);
 }
 void BM_PortalProduct_Grid(benchmark::State& s) {
   product_through_portals(s, static_cast<int>(s.range(0)), PortalEstimate::Grid);
@@ -123,6 +130,8 @@ void BM_PortalEnvironment(benchmark::State& state) {
 
 BENCHMARK(BM_PortalProduct_None);
 BENCHMARK(BM_PortalProduct_Cone)->ArgName("portals")->Arg(1)->Arg(4);
+BENCHMARK(BM_PortalPrepare_None);
+BENCHMARK(BM_PortalPrepare_Cone)->ArgName("portals")->Arg(1)->Arg(4);
 BENCHMARK(BM_PortalProduct_Grid)->ArgName("portals")->Arg(1)->Arg(4);
 BENCHMARK(BM_PortalView)->ArgNames({"portals", "grid"})->Args({1, 0})->Args({4, 0})->Args({1, 1})->Args({4, 1});
 BENCHMARK(BM_PortalEnvironment)->ArgName("portals")->Arg(1)->Arg(4);

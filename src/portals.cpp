@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <string>
 
 #include "envpis/equal_area.h"
@@ -101,8 +103,9 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
-  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &near_, &full_})
+  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &full_})
     a->assign(padded, 0.0f);
+  near_.assign(padded, 0);
   candidates_.assign(padded, 0);
   for (auto& g : gather_) g.assign(padded, 0.0f);
   for (int c = 0; c < cells; ++c) {
@@ -116,6 +119,7 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
     sin_[c] = small ? k.sin_half_angle : 0.0f;
     big_[c] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
   }
+  for (std::size_t c = static_cast<std::size_t>(cells); c < padded; ++c) big_[c] = -8.0f;  // padding: never near
   if (options.estimate != PortalEstimate::Grid) return;
   const int K = options.grid;
   grid_dirs_.reserve(static_cast<std::size_t>(cells) * K * K);
@@ -162,10 +166,8 @@ bool PortalView::prepare(Vec3 p) {
     seen_.push_back(s);
   }
   if (seen_.empty()) return false;
-  cone_pass();
+  cone_pass();  // sets visible_
   if (options_.estimate == PortalEstimate::Grid) grid_pass();
-  const int cells = table_->cell_count();
-  for (int c = 0; c < cells && !visible_; ++c) visible_ = v_[c] > 0.0f;
   return visible_;
 }
 
@@ -200,6 +202,7 @@ void PortalView::near_cells(const Seen& s, int count) {
     const int c = candidates_[i];
     v_[c] = std::min(1.0f, v_[c] + gx[i]);
     if (gx[i] >= 1.0f) full_[c] = 1.0f;  // the portal holds the whole cone (see grid_pass)
+    if (gx[i] > 0.0f) visible_ = true;
   }
 }
 
@@ -230,7 +233,8 @@ void PortalView::cone_pass() {
   const float* __restrict cosb = cos_.data();
   const float* __restrict sinb = sin_.data();
   const float* __restrict big = big_.data();
-  float* __restrict near = near_.data();
+  const int padded = static_cast<int>(v_.size());  // a multiple of 16: whole words of flags
+  std::uint8_t* __restrict flag = near_.data();
   for (const Seen& s : seen_) {
     const float gx = s.g[0], gy = s.g[1], gz = s.g[2], cp = s.cos_p, sp = s.sin_p;
     if (s.wide) {
@@ -238,16 +242,18 @@ void PortalView::cone_pass() {
         const float share = cone_share(s, c);
         v_[c] = std::min(1.0f, v_[c] + share);
         if (share >= 1.0f) full_[c] = 1.0f;
+        if (share > 0.0f) visible_ = true;
       }
       continue;
     }
-    for (int c = 0; c < n; ++c)
-      near[c] = ax[c] * gx + ay[c] * gy + az[c] * gz - (cosb[c] * cp - sinb[c] * sp) + big[c] + kMargin;
-    // The near cells' indices, without a branch per cell (they are scattered: a branch mispredicts).
+    for (int c = 0; c < padded; ++c)
+      flag[c] = ax[c] * gx + ay[c] * gy + az[c] * gz - (cosb[c] * cp - sinb[c] * sp) + big[c] + kMargin >= 0.0f;
+    // The near cells' indices: eight flags at a time, one bit each, most words zero.
     int count = 0;
-    for (int c = 0; c < n; ++c) {
-      candidates_[count] = c;
-      count += near[c] >= 0.0f;
+    for (int w = 0; w < padded; w += 8) {
+      std::uint64_t bits;
+      std::memcpy(&bits, flag + w, sizeof bits);
+      for (; bits; bits &= bits - 1) candidates_[count++] = w + __builtin_ctzll(bits) / 8;
     }
     near_cells(s, count);
   }

@@ -33,6 +33,7 @@
 // shading point prepare(p), then hand it to the sampler's prepare.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -139,7 +140,8 @@ class PortalView {
   std::vector<float> v_;    // V[c], padded like the table's top level
   // The top cells' cones as arrays (axis, 1 / sin, the outside and inside thresholds), for cone_pass.
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
-  std::vector<float> cos_, sin_, big_, near_;
+  std::vector<float> cos_, sin_, big_;
+  std::vector<std::uint8_t> near_;  // per cell: 1 when near the portal at hand (cone_pass)
   std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
   std::vector<int> candidates_;
   std::vector<float> gather_[6];
