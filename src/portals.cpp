@@ -200,9 +200,10 @@ void PortalView::near_cells(const Seen& s, int count) {
   }
   for (int i = 0; i < count; ++i) {
     const int c = candidates_[i];
+    // Selects, not branches (the shares fall at random: a branch mispredicts).
     v_[c] = std::min(1.0f, v_[c] + gx[i]);
-    if (gx[i] >= 1.0f) full_[c] = 1.0f;  // the portal holds the whole cone (see grid_pass)
-    if (gx[i] > 0.0f) visible_ = true;
+    full_[c] = gx[i] >= 1.0f ? 1.0f : full_[c];  // the portal holds the whole cone (see grid_pass)
+    visible_ |= gx[i] > 0.0f;
   }
 }
 
