@@ -19,6 +19,8 @@
 #include "envpis/equal_area.h"
 #include "envpis/importance_table.h"
 #include "envpis/mis.h"
+#include "envpis/portal_sampler.h"
+#include "envpis/portals.h"
 #include "envpis/product_cache.h"
 #include "envpis/product_sampler.h"
 #include "envpis/simd.h"

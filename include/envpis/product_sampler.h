@@ -46,6 +46,19 @@
 // weight, the sampler uses the environment-only distribution. If the normal or wo is zero/NaN, or
 // the table is empty (all-black map), it is invalid: sample() returns pdf 0 and pdf() returns 0.
 //
+// Portals (issue 24; envpis/portals.h, docs/portals.md): prepare() can take a PortalView prepared for
+// the shading point p (the product's other inputs, n and wo, do not locate the point; the view does).
+// Each cell's weight then gains the view's visible fraction, P[c] = E[c] proxy(c) V[c], and the
+// environment that the floor and env_mix refer to becomes the portal-masked one, E[c] V[c] / sum E V
+// (PortalEnvironmentSampler's distribution), so every cell with V[c] = 0 keeps density 0: directions
+// that provably miss every portal get no light samples, and BSDF samples carry them under MIS. The
+// sub-cell level is masked likewise, E[s | c] proxy(s) V[s] when refining and E[s | c] V[s] otherwise
+// (the environment's own shares in a cell where no sub-cell is estimated visible). The fallback when
+// the proxy sees no visible cell is PortalEnvironmentSampler's distribution. If the view sees nothing
+// (visible() false), or the proxy sees none of the visible cells (every portal behind an opaque
+// surface), the sampler is invalid: no sample, pdf 0. (An all-zero proxy falls back as without portals.) Without a view (nullptr, or the
+// three-argument prepare), nothing changes: the same arithmetic, bit for bit.
+//
 // Usage: create one ProductSampler per thread (it owns O(T^2) scratch allocated once), then per
 // shading point call prepare() and any number of sample()/pdf(). Nothing allocates after construction.
 // sample() and pdf() reuse the sampler's scratch too: one sampler must not be used by two threads.
@@ -56,6 +69,7 @@
 
 #include "envpis/bsdf_proxy.h"
 #include "envpis/importance_table.h"
+#include "envpis/portals.h"
 #include "envpis/simd.h"
 
 namespace envpis {
@@ -104,7 +118,11 @@ class ProductSampler : private SubcellLevel {
   /// Builds the T x T product distribution for a shading point: unit (or any non-zero) normal n,
   /// outgoing direction wo (pointing away from the surface, towards the viewer), and the proxy.
   /// Returns valid().
-  bool prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy);
+  bool prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) { return prepare(n, wo, proxy, nullptr); }
+  /// The same through portals (see above): `portals` prepared for the shading point, over this
+  /// sampler's table, or nullptr for none. The sampler keeps the pointer until the next prepare();
+  /// the view must stay prepared for the same point while sample() and pdf() are used.
+  bool prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const PortalView* portals);
 
   bool valid() const { return valid_; }
   /// True when the last prepare() fell back to environment-only sampling.
@@ -141,6 +159,14 @@ class ProductSampler : private SubcellLevel {
   DiscreteDistribution2D top_;  // P[c], unnormalized (its pmf normalizes)
   float weigh_subcells(int c, DiscreteDistribution2D& out) const;
   void reestimate_heaviest_cells();
+  bool apply_portals();
+  bool mask_subcells(int c, const float* e, float* w, float* masked) const;
+  const DiscreteDistribution2D& portal_subcells(int c) const;
+  const PortalView* view_ = nullptr;  // the last prepare()'s portals, or nullptr
+  std::vector<float> masked_env_;     // E[c] V[c] (padded), with a view
+  float masked_scale_ = 1;            // 1 / sum E V
+  mutable DiscreteDistribution2D portal_sub_;  // not refining, with a view: the last cell's E[s | c] V[s]
+  mutable int portal_sub_cell_ = -1;
   // Sub-cell distributions: one per cell re-estimated in prepare(), then kRecentCells for the cells
   // sample() and pdf() needed last (a glossy lobe's light and BSDF samples spread over a dozen cells).
   static constexpr int kRecentCells = 16;
