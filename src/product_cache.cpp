@@ -114,28 +114,30 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
   }
   const Key k = key(n, wo, proxy);
   ++clock_;
-  if (last_use_[last_] != 0 && keys_[last_] == k) {  // consecutive samples of a pixel: the usual hit
+  auto holds = [&](std::size_t i) { return last_use_[i] != 0 && keys_[i] == k; };
+  auto use = [&](std::size_t i) -> ProductSampler& {
+    last_use_[i] = clock_;
+    last_ = i;
+    return samplers_[i];
+  };
+  if (holds(last_)) {  // consecutive samples of a pixel: the usual hit
     ++hits_;
-    last_use_[last_] = clock_;
-    return samplers_[last_];
+    return use(last_);
   }
   std::size_t oldest = 0;
   for (std::size_t i = 0; i < keys_.size(); ++i) {
-    if (last_use_[i] != 0 && keys_[i] == k) {
+    if (holds(i)) {
       ++hits_;
-      last_use_[i] = clock_;
-      last_ = i;
-      return samplers_[i];
+      return use(i);
     }
     if (last_use_[i] < last_use_[oldest]) oldest = i;
   }
   ++misses_;
   keys_[oldest] = k;
-  last_use_[oldest] = clock_;
-  last_ = oldest;
   const Rounded r = rounded(k);  // from the key alone, so a point's distribution is its key's
-  samplers_[oldest].prepare(r.n, r.wo, r.proxy);
-  return samplers_[oldest];
+  ProductSampler& s = use(oldest);
+  s.prepare(r.n, r.wo, r.proxy);
+  return s;
 }
 
 }  // namespace envpis
