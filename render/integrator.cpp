@@ -91,6 +91,7 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     // 1. Light sample.
     if (light.has_light_samples()) {
       ShadingContext sc;
+      sc.p = hit.p;
       sc.n = sn.ns;
       sc.wo = wo;
       sc.wo_local = wo_l;

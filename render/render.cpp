@@ -66,6 +66,9 @@ void validate(const RenderOptions& o) {
 RenderResult render(const Scene& scene, const RenderOptions& options) {
   validate(options);
   if (!scene.committed()) throw Error("render: the scene is not committed");
+  if (uses_portals(options.strategy) && scene.portals().empty())
+    throw Error(std::string("strategy ") + to_string(options.strategy) +
+                " needs a scene with portals (a scene file's \"portals\" field)");
   const int W = options.width > 0 ? options.width : scene.camera().width;
   const int H = options.height > 0 ? options.height : scene.camera().height;
   if (W <= 0 || H <= 0 || W > kMaxImageSide || H > kMaxImageSide || std::int64_t(W) * H > kMaxImagePixels)
@@ -123,7 +126,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         tbb::blocked_range<int>(0, tiles, 1),
         [&](const tbb::blocked_range<int>& range) {
           auto& slot = samplers.local();
-          if (!slot) slot.emplace(*tables);
+          if (!slot) slot.emplace(*tables, &scene.portals());
           LightSampler& light = *slot;
           FireflyRecorder* log = nullptr;
           if (options.firefly_log) {

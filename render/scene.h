@@ -122,6 +122,12 @@ class Scene {
   bool widen_bent_normals() const { return widen_bent_normals_; }
   bool proxy_closed_surfaces() const { return proxy_closed_surfaces_; }
 
+  /// The scene's portals (envpis/portals.h: quads in the window openings, counter-clockwise seen from
+  /// outside), used by the portal-aware strategies (render/strategy.h). Empty by default; they are not
+  /// geometry (rays pass through them) and other strategies ignore them.
+  void set_portals(Portals portals) { portals_ = std::move(portals); }
+  const Portals& portals() const { return portals_; }
+
   /// Builds the Embree acceleration structure and sets each material's closed-surface flag. Throws
   /// Error when there is no environment, no object or Embree fails.
   void commit();
@@ -149,6 +155,7 @@ class Scene {
   std::string env_description_;
   bool proxy_closed_surfaces_ = true;
   bool widen_bent_normals_ = true;
+  Portals portals_;
   void update_closed_surface_flags();
   static std::vector<FaceTangent> face_tangents(const TriangleMesh& m, const std::vector<Vec3>& fn);
   bool committed_ = false;

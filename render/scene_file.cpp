@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "render/gltf.h"
+#include "render/scene_portals.h"
 
 namespace envpis::render {
 
@@ -526,7 +527,7 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   json j;
   try {
     j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // also out_of_range: a number too large for a double (1e999)
     throw Error(path + ": invalid JSON: " + e.what());
   }
   const fs::path dir = fs::path(path).parent_path();
@@ -604,6 +605,7 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   // Closed-surface proxy (docs/proxy.md): on unless the file says otherwise.
   s.set_proxy_closed_surfaces(top.boolean("closed_surfaces", true));
   s.set_widen_bent_normals(top.boolean("widen_bent_normals", true));
+  if (top.has("portals")) s.set_portals(parse_portals(top.get("portals"), path));
   top.finish();
   s.commit();
   return s;

@@ -11,9 +11,12 @@
 namespace envpis::render {
 
 Strategy parse_strategy(const std::string& s) {
-  for (Strategy k : all_strategies())
-    if (s == to_string(k)) return k;
-  throw Error("unknown strategy '" + s + "' (expected bsdf, env, mis, mis-comp, product or oracle)");
+  for (const auto* list : {&all_strategies(), &portal_strategies()})
+    for (Strategy k : *list)
+      if (s == to_string(k)) return k;
+  throw Error("unknown strategy '" + s +
+              "' (expected bsdf, env, mis, mis-comp, product, oracle, env-portal, mis-portal, mis-comp-portal or "
+              "product-portal)");
 }
 
 const char* to_string(Strategy s) {
@@ -24,8 +27,30 @@ const char* to_string(Strategy s) {
     case Strategy::MisComp: return "mis-comp";
     case Strategy::Product: return "product";
     case Strategy::Oracle: return "oracle";
+    case Strategy::EnvPortal: return "env-portal";
+    case Strategy::MisPortal: return "mis-portal";
+    case Strategy::MisCompPortal: return "mis-comp-portal";
+    case Strategy::ProductPortal: return "product-portal";
   }
   return "?";
+}
+
+const std::vector<Strategy>& portal_strategies() {
+  static const std::vector<Strategy> all{Strategy::EnvPortal, Strategy::MisPortal, Strategy::MisCompPortal,
+                                         Strategy::ProductPortal};
+  return all;
+}
+
+bool uses_portals(Strategy s) { return base_strategy(s) != s; }
+
+Strategy base_strategy(Strategy s) {
+  switch (s) {
+    case Strategy::EnvPortal: return Strategy::Env;
+    case Strategy::MisPortal: return Strategy::Mis;
+    case Strategy::MisCompPortal: return Strategy::MisComp;
+    case Strategy::ProductPortal: return Strategy::Product;
+    default: return s;
+  }
 }
 
 const std::vector<Strategy>& all_strategies() {
@@ -67,7 +92,7 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
   t.light_table = light_table;
   t.light_table.compensated = false;
   ImportanceTableOptions opt = t.light_table;
-  switch (strategy) {
+  switch (base_strategy(strategy)) {  // a portal variant masks its base strategy's table per point
     case Strategy::Bsdf: break;
     case Strategy::Env:
     case Strategy::Mis:
@@ -83,13 +108,27 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
       t.table = std::make_shared<ImportanceTable>(env, opt);
       if (!t.table->empty()) t.oracle_cells = std::make_shared<OracleCells>(env, t.table);
       break;
+    default: break;  // base_strategy() is never a portal variant
   }
   t.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return t;
 }
 
-LightSampler::LightSampler(const StrategyTables& tables)
+LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
     : strategy_(tables.strategy), table_(tables.table.get()) {
+  if (uses_portals(strategy_)) {
+    if (!portals || portals->empty())
+      throw Error(std::string("strategy ") + to_string(strategy_) + " needs a scene with portals");
+    if (table_ && !table_->empty()) {
+      view_ = std::make_unique<PortalView>(*table_, *portals);
+      portal_env_ = std::make_unique<PortalEnvironmentSampler>(*table_);
+      if (strategy_ == Strategy::ProductPortal) {  // exact per point: the cache's key has no p
+        product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+        product_depth_ = tables.product_depth;
+      }
+    }
+    return;
+  }
   if (strategy_ == Strategy::Product && table_) {
     product_depth_ = tables.product_depth;
     if (tables.product_cache.entries > 0) {
@@ -106,17 +145,43 @@ LightSampler::LightSampler(const StrategyTables& tables)
 LightSampler::LightSampler(LightSampler&&) noexcept = default;
 LightSampler::~LightSampler() = default;
 
+namespace {
+
+BsdfProxy make_proxy(const ShadingContext& sc) {
+  BsdfProxy proxy;
+  sc.bsdf->fill_proxy(proxy, sc.wo_local);
+  if (sc.cos_bent < 1) {
+    proxy.alpha_reflection = widen_roughness(proxy.alpha_reflection, sc.cos_bent);
+    proxy.alpha_refraction = widen_roughness(proxy.alpha_refraction, sc.cos_bent);
+  }
+  return proxy;
+}
+
+}  // namespace
+
+void LightSampler::prepare_portals(const ShadingContext& sc) {
+  product_ = nullptr;
+  portal_valid_ = false;
+  if (!view_ || !view_->prepare(sc.p)) return;  // no portal seen from p: BSDF samples alone
+  const bool product = strategy_ == Strategy::ProductPortal && !(product_depth_ > 0 && sc.depth >= product_depth_);
+  if (product) {
+    portal_valid_ = product_exact_->prepare(sc.n, sc.wo, make_proxy(sc), view_.get());
+    if (portal_valid_) product_ = product_exact_.get();
+  } else {
+    portal_valid_ = portal_env_->prepare(*view_);
+  }
+}
+
 void LightSampler::prepare(const ShadingContext& sc) {
+  if (uses_portals(strategy_)) {
+    prepare_portals(sc);
+    return;
+  }
   if (strategy_ == Strategy::Product) {
     product_ = nullptr;
     if (!product_exact_ && !product_first_) return;
     if (product_depth_ > 0 && sc.depth >= product_depth_) return;  // the table's distribution, as mis
-    BsdfProxy proxy;
-    sc.bsdf->fill_proxy(proxy, sc.wo_local);
-    if (sc.cos_bent < 1) {
-      proxy.alpha_reflection = widen_roughness(proxy.alpha_reflection, sc.cos_bent);
-      proxy.alpha_refraction = widen_roughness(proxy.alpha_refraction, sc.cos_bent);
-    }
+    const BsdfProxy proxy = make_proxy(sc);
     if (product_exact_) {
       product_exact_->prepare(sc.n, sc.wo, proxy);
       product_ = product_exact_.get();
@@ -144,6 +209,12 @@ DirectionSample LightSampler::sample(Point2 u) const {
     case Strategy::MisComp: return table_ ? table_->sample(u) : DirectionSample{};
     case Strategy::Product: return product_ ? product_->sample(u) : table_ ? table_->sample(u) : DirectionSample{};
     case Strategy::Oracle: return oracle_ ? oracle_->sample(u) : DirectionSample{};
+    case Strategy::EnvPortal:
+    case Strategy::MisPortal:
+    case Strategy::MisCompPortal:
+    case Strategy::ProductPortal:
+      if (!portal_valid_) return {};
+      return product_ ? product_->sample(u) : portal_env_->sample(u);
   }
   return {};
 }
@@ -156,6 +227,14 @@ float LightSampler::pdf(Vec3 wi) const {
     case Strategy::MisComp: return table_ ? table_->pdf(wi) : 0.0f;
     case Strategy::Product: return product_ ? product_->pdf(wi) : table_ ? table_->pdf(wi) : 0.0f;
     case Strategy::Oracle: return oracle_ ? oracle_->pdf(wi) : 0.0f;
+    case Strategy::EnvPortal:
+    case Strategy::MisPortal:
+    case Strategy::MisCompPortal:
+    case Strategy::ProductPortal:
+      // The density sample() draws from at this point (0 where it has none): the BSDF sample's MIS
+      // weight then is 1, which keeps the estimate unbiased.
+      if (!portal_valid_) return 0.0f;
+      return product_ ? product_->pdf(wi) : portal_env_->pdf(wi);
   }
   return 0;
 }

@@ -14,6 +14,18 @@
 //             cell's fine texels weighted by the same product; + BSDF sampling, MIS
 //             (render/oracle.h). Slow: the limit the paper's two-level method approaches.
 //
+// Portal-aware variants (issue 24; docs/portals.md, "In the renderer"), for scenes with portals
+// (Scene::portals): env-portal, mis-portal, mis-comp-portal and product-portal use the same table as
+// env, mis, mis-comp and product, but per shading point a PortalView prepared at the hit point masks
+// it: PortalEnvironmentSampler for the first three, ProductSampler::prepare(n, wo, proxy, &view) for
+// product-portal (prepared exactly per point: ProductCache keys on (n, wo, proxy) only, and with
+// portals the distribution also depends on p). Where the view sees no portal (or the masked
+// distribution is empty) the point has no light sample and pdf() is 0, so BSDF samples carry it alone
+// (MIS weight 1): unbiased for the MIS variants even when portals miss part of an opening.
+// env-portal has no BSDF hits, so it is unbiased only when the portals cover every opening.
+// They are separate names (not a switch) so `compare` can set both variants side by side; they are
+// not in all_strategies() (a scene without portals has nothing for them: render() rejects that).
+//
 // Tables (StrategyTables) are built once per environment and strategy and shared by all threads;
 // a LightSampler (one per thread) turns them into a distribution per shading point.
 #pragma once
@@ -29,11 +41,19 @@
 
 namespace envpis::render {
 
-enum class Strategy { Bsdf, Env, Mis, MisComp, Product, Oracle };
-/// "bsdf" | "env" | "mis" | "mis-comp" | "product" | "oracle"; throws Error otherwise.
+enum class Strategy { Bsdf, Env, Mis, MisComp, Product, Oracle, EnvPortal, MisPortal, MisCompPortal, ProductPortal };
+/// "bsdf" | "env" | "mis" | "mis-comp" | "product" | "oracle", or one of the portal variants
+/// "env-portal" | "mis-portal" | "mis-comp-portal" | "product-portal"; throws Error otherwise.
 Strategy parse_strategy(const std::string& s);
 const char* to_string(Strategy s);
+/// The strategies without portals (every scene can use them).
 const std::vector<Strategy>& all_strategies();
+/// The portal-aware variants (scenes with portals only).
+const std::vector<Strategy>& portal_strategies();
+/// Whether s is a portal-aware variant.
+bool uses_portals(Strategy s);
+/// The strategy without portals a variant masks (s itself for the others): its table and options.
+Strategy base_strategy(Strategy s);
 
 enum class Heuristic { Power, Balance };
 Heuristic parse_heuristic(const std::string& s);  ///< "power" | "balance"
@@ -85,6 +105,7 @@ struct StrategyTables {
 
 /// The shading point a light sampler prepares for.
 struct ShadingContext {
+  Vec3 p;         ///< world hit point (the portal variants prepare their PortalView there)
   Vec3 n;         ///< world shading normal (the local frame's +Z)
   Vec3 wo;        ///< world outgoing direction (towards the viewer), unit
   Vec3 wo_local;  ///< the same in the local frame
@@ -104,7 +125,9 @@ struct ShadingContext {
 /// Per-thread light sampling for one strategy. Not thread-safe; create one per thread.
 class LightSampler {
  public:
-  explicit LightSampler(const StrategyTables& tables);
+  /// `portals`: the scene's, for the portal variants (copied into the per-thread view); throws Error
+  /// when a portal variant gets none.
+  explicit LightSampler(const StrategyTables& tables, const Portals* portals = nullptr);
   LightSampler(LightSampler&&) noexcept;
   ~LightSampler();
 
@@ -112,11 +135,12 @@ class LightSampler {
   /// Whether this strategy draws light samples at all.
   bool has_light_samples() const { return strategy_ != Strategy::Bsdf && table_ != nullptr && !table_->empty(); }
   /// Whether BSDF-sampled directions that reach the environment contribute (with MIS weights).
-  bool bsdf_hits_count() const { return strategy_ != Strategy::Env; }
+  bool bsdf_hits_count() const { return base_strategy(strategy_) != Strategy::Env; }
   /// Whether the light and BSDF estimates are combined by MIS (otherwise each has weight 1).
-  bool uses_mis() const { return strategy_ != Strategy::Bsdf && strategy_ != Strategy::Env; }
+  bool uses_mis() const { return strategy_ != Strategy::Bsdf && base_strategy(strategy_) != Strategy::Env; }
 
-  /// Builds the per-shading-point distribution (product and oracle); cheap no-op for the others.
+  /// Builds the per-shading-point distribution (product, oracle and the portal variants); cheap no-op
+  /// for the others.
   void prepare(const ShadingContext& sc);
   /// A world direction and its solid-angle density (pdf 0: no sample).
   DirectionSample sample(Point2 u) const;
@@ -137,6 +161,12 @@ class LightSampler {
   const ProductSampler* product_ = nullptr;                      // the current shading point's
   int product_depth_ = 0;
   std::unique_ptr<OracleSampler> oracle_;
+  // The portal variants: the view at the current point, the masked environment (also product-portal's
+  // beyond product_depth), whether the current point has a light sample.
+  std::unique_ptr<PortalView> view_;
+  std::unique_ptr<PortalEnvironmentSampler> portal_env_;
+  bool portal_valid_ = false;
+  void prepare_portals(const ShadingContext& sc);
 };
 
 }  // namespace envpis::render

@@ -50,7 +50,16 @@ json file_identity(const std::string& path) {
 }
 
 /// The options of `strategy` that change its image (each only for the strategies that use it).
-void put_strategy_options(json& key, const Scene& scene, const RenderOptions& base, Strategy strategy) {
+void put_strategy_options(json& key, const Scene& scene, const RenderOptions& base, Strategy variant) {
+  // A portal variant (render/strategy.h) renders with its base strategy's options, masked by the
+  // scene's portals: those go in the key too (the scene file's mtime would catch an edit, a glTF's not).
+  const Strategy strategy = base_strategy(variant);
+  if (uses_portals(variant)) {
+    json quads = json::array();
+    for (int i = 0; i < scene.portals().size(); ++i)
+      for (const Vec3& v : scene.portals().quad(i).v) quads.push_back({v.x, v.y, v.z});
+    key["portals"] = quads;
+  }
   if (strategy == Strategy::Oracle)  // "v2": the oracle of render/oracle.h (cell shares by quadrature)
     key["oracle"] = {base.oracle.resolution, base.oracle.directions, base.oracle.mis_compensation, "v2"};
   if (strategy != Strategy::Bsdf && strategy != Strategy::Oracle) key["top"] = base.light_table.top_resolution;
@@ -70,7 +79,7 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product && base.product.refine) key["refine_cells"] = base.product.refine_cells;
   if (strategy == Strategy::Product && base.product.cell_estimate != CellEstimate::Cone)  // old keys: cone
     key["cell_estimate"] = to_string(base.product.cell_estimate);
-  if (strategy == Strategy::Product && base.product_cache.entries > 0)  // its size changes speed, not images
+  if (variant == Strategy::Product && base.product_cache.entries > 0)  // product-portal has no cache
     key["product_cache_resolution"] = base.product_cache.resolution;
   if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
 }
