@@ -40,8 +40,8 @@ def parse_args(argv):
     p = C.Parser(prog="cycles-assets.sh", description="Cycles vs envpis on the glTF asset scenes (docs/cycles.md)",
                  epilog="cycles-assets.sh also takes --install (or CYCLES_INSTALL=1): apt-get install blender "
                         "when it is missing.")
-    p.add_argument("--scenes", default="bunny,clearcoat,engine",
-                   help="comma-separated scenes: NAME for scenes/assets-NAME.json, or a path (default all three)")
+    p.add_argument("--scenes", default="bunny,clearcoat,engine,suzanne-closeup",
+                   help="comma-separated scenes: NAME for scenes/assets-NAME.json, or a path (default all four)")
     p.add_argument("--maps", default="sunrise,studio", help="maps: names in %s, or paths" % C.STUDIOLIGHTS)
     p.add_argument("--width", type=int, default=128, help="image width (default 128)")
     p.add_argument("--height", type=int, default=72, help="image height (default 72)")
