@@ -7,20 +7,20 @@
 #
 #   scripts/interiors-bench.sh [OUT]     (default out/interiors, git-ignored)
 #
-# Environment: BUILD (build), SIZE (96x72), SPP (64), REF_SPP (1024), SEEDS (3), MAPS (sunrise, city,
-# courtyard from the blender maps, park from the @pmndrs HDRIs), SCENES (room, two-windows),
+# Environment: BUILD (build), SIZE (64x48), SPP (64), REF_SPP (1024), SEEDS (3), MAPS (sunrise and city
+# from the blender maps, park from the @pmndrs HDRIs), SCENES (room, two-windows),
 # INTEGRATORS (direct path). Every render runs under nice -n 19 with 2 threads.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/interiors}
 BUILD=${BUILD:-build}
-SIZE=${SIZE:-96x72}
+SIZE=${SIZE:-64x48}
 SPP=${SPP:-64}
 REF_SPP=${REF_SPP:-1024}
 SEEDS=${SEEDS:-3}
 WORLDS=/usr/share/blender/datafiles/studiolights/world
 ASSETS=${ENVPIS_ASSETS:-${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets}
-MAPS=${MAPS:-"$WORLDS/sunrise.exr $WORLDS/city.exr $WORLDS/courtyard.exr $ASSETS/hdri/park.exr"}
+MAPS=${MAPS:-"$WORLDS/sunrise.exr $WORLDS/city.exr $ASSETS/hdri/park.exr"}
 SCENES=${SCENES:-"room two-windows"}
 INTEGRATORS=${INTEGRATORS:-"direct path"}
 ENVPIS="$BUILD/apps/envpis/envpis"
