@@ -13,6 +13,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "render/scene_portals.h"
+
 namespace envpis::render {
 
 namespace fs = std::filesystem;
@@ -284,7 +286,31 @@ Vec3 y_up_to_z_up(aiVector3D v) { return {v.x, -v.z, v.y}; }
 
 }  // namespace
 
+bool is_portal_node(const std::string& name) { return name.rfind("portal", 0) == 0; }
+
 namespace {
+
+/// The portal quad of a node: its meshes' triangles in the renderer's frame, wound as in the file
+/// (a mirroring transform M swaps the winding back, as for geometry).
+Quad read_portal(const aiScene* sc, const aiNode* node, const aiMatrix4x4& M, bool mirror) {
+  std::vector<Vec3> positions;
+  std::vector<std::uint32_t> indices;
+  for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+    if (node->mMeshes[k] >= sc->mNumMeshes) throw Error("refers to a missing mesh");
+    const aiMesh* am = sc->mMeshes[node->mMeshes[k]];
+    const std::uint32_t base = std::uint32_t(positions.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) positions.push_back(y_up_to_z_up(M * am->mVertices[v]));
+    for (unsigned t = 0; t < am->mNumFaces; ++t) {
+      const aiFace& f = am->mFaces[t];
+      if (f.mNumIndices != 3) continue;
+      for (unsigned q = 0; q < 3; ++q)
+        if (f.mIndices[q] >= am->mNumVertices) throw Error("a face index is out of range");
+      const unsigned b = mirror ? 2 : 1, c = mirror ? 1 : 2;
+      indices.insert(indices.end(), {base + f.mIndices[0], base + f.mIndices[b], base + f.mIndices[c]});
+    }
+  }
+  return quad_from_triangles(positions, indices);
+}
 
 GltfModel read_gltf(const std::string& path) {
   std::error_code ec;
@@ -332,6 +358,7 @@ GltfModel read_gltf(const std::string& path) {
 
   // Geometry: one mesh per material, node transforms applied.
   std::map<int, std::size_t> part_of;
+  Portals checked;  // the portals read so far, validated as the scene will hold them
   std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{sc->mRootNode, sc->mRootNode->mTransformation}};
   int depth_guard = 0;
   while (!stack.empty()) {
@@ -343,7 +370,17 @@ GltfModel read_gltf(const std::string& path) {
     aiMatrix3x3 N(M);
     N.Inverse().Transpose();
     const bool mirror = aiMatrix3x3(M).Determinant() < 0;
-    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+    const bool portal = is_portal_node(node->mName.C_Str()) && node->mNumMeshes > 0;
+    if (portal) {
+      const std::string where = "portal node '" + std::string(node->mName.C_Str()) + "'";
+      try {
+        model.portals.push_back({node->mName.C_Str(), read_portal(sc, node, M, mirror)});
+      } catch (const Error& e) {
+        fail(path, where + ": " + e.what());
+      }
+      add_portal(checked, model.portals.back().quad, path + ": " + where);
+    }
+    for (unsigned k = 0; !portal && k < node->mNumMeshes; ++k) {
       if (node->mMeshes[k] >= sc->mNumMeshes) fail(path, "node refers to a missing mesh");
       const aiMesh* am = sc->mMeshes[node->mMeshes[k]];
       if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;

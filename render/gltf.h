@@ -9,6 +9,11 @@
 // read; a texture that asks for another set is an error, as is any file assimp rejects, an index or
 // accessor out of range, or a texture that cannot be decoded: load_gltf throws Error with one line
 // that names the file.
+//
+// Portals (docs/scene-format.md, "Portals in glTF"): a node whose name starts with "portal" is not
+// geometry but a portal quad in a window opening, its front face (counter-clockwise winding, as glTF
+// defines it) looking out of the room. Its triangles become one quad (render/scene_portals.h), node
+// transforms applied; a node that is not a planar convex quad is an Error naming the file and the node.
 #pragma once
 
 #include <optional>
@@ -17,6 +22,7 @@
 
 #include "render/camera.h"
 #include "render/scene.h"
+#include "envpis/portals.h"
 
 namespace envpis::render {
 
@@ -29,7 +35,15 @@ struct GltfModel {
   std::vector<Part> parts;
   std::vector<SceneMaterial> materials;  ///< named like the parts; pbr set, bsdf its untextured look
   std::optional<CameraSpec> camera;      ///< the first camera of the node tree, if any
+  struct Portal {
+    std::string node;  ///< the glTF node's name (for messages)
+    Quad quad;         ///< in the renderer's frame, counter-clockwise seen from outside
+  };
+  std::vector<Portal> portals;  ///< validated together by Portals (at most Portals::kMaxPortals)
 };
+
+/// Whether a glTF node with this name is a portal rather than geometry.
+bool is_portal_node(const std::string& name);
 
 GltfModel load_gltf(const std::string& path);
 

@@ -458,8 +458,9 @@ void check_camera(const CameraSpec& cam, const Fields& f) {
 
 /// A glTF object: one mesh per glTF material (or all with the scene material `material`), named
 /// "<name>/<glTF material>"; with "use_camera": true the file's camera, transformed, is the scene's.
+/// The file's portal nodes, transformed, are added to `portals`.
 void add_gltf_object(Scene& s, const Fields& f, const fs::path& dir, const std::string& name,
-                     std::optional<CameraSpec>& camera) {
+                     std::optional<CameraSpec>& camera, Portals& portals) {
   const std::string file = scene_path(f, "file", dir);
   GltfModel model;
   try {
@@ -488,6 +489,12 @@ void add_gltf_object(Scene& s, const Fields& f, const fs::path& dir, const std::
     camera = c;
   }
   f.finish();
+  for (const GltfModel::Portal& p : model.portals) {
+    Quad q;
+    for (int i = 0; i < 4; ++i) q.v[i] = tr.point(p.quad.v[i]);
+    if (tr.scale.x * tr.scale.y * tr.scale.z < 0) std::swap(q.v[1], q.v[3]);  // keep it counter-clockwise from outside
+    add_portal(portals, q, f.file() + ": " + f.sub("file") + ": " + file + ": portal node '" + p.node + "'");
+  }
   if (override_material >= 0) {
     TriangleMesh all;
     bool uvs = true;  // kept when every part has them (a textured replacement material needs them)
@@ -560,7 +567,8 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
     s.add_material(parse_material(f, it.key(), dir));
   }
 
-  // objects
+  // objects (a glTF object's portal nodes join the scene's portals, before the file's own "portals")
+  Portals portals;
   const json& objs = top.get("objects");
   if (!objs.is_array() || objs.empty()) top.fail_at("objects", "expected a non-empty array");
   for (std::size_t i = 0; i < objs.size(); ++i) {
@@ -568,7 +576,7 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
     const std::string type = f.string("type");
     std::string name = f.string("name", type + "-" + std::to_string(i));
     if (type == "gltf") {
-      add_gltf_object(s, f, dir, name, camera);
+      add_gltf_object(s, f, dir, name, camera, portals);
       continue;
     }
     const std::string mname = f.string("material");
@@ -605,7 +613,8 @@ Scene load_scene_file(const std::string& path, std::shared_ptr<const Environment
   // Closed-surface proxy (docs/proxy.md): on unless the file says otherwise.
   s.set_proxy_closed_surfaces(top.boolean("closed_surfaces", true));
   s.set_widen_bent_normals(top.boolean("widen_bent_normals", true));
-  if (top.has("portals")) s.set_portals(parse_portals(top.get("portals"), path));
+  if (top.has("portals")) portals = parse_portals(top.get("portals"), path, std::move(portals));
+  s.set_portals(std::move(portals));
   top.finish();
   s.commit();
   return s;
@@ -654,6 +663,9 @@ Scene load_gltf_scene(const std::string& path, std::shared_ptr<const Environment
     cam.vfov_degrees = 40.0f;
   }
   s.set_camera(cam);
+  Portals portals;  // already validated by load_gltf
+  for (const GltfModel::Portal& p : model.portals) add_portal(portals, p.quad, path + ": portal node '" + p.node + "'");
+  s.set_portals(std::move(portals));
   std::string desc = env ? (env->path().empty() ? std::string("user map") : env->path()) : std::string();
   if (!env) env = default_environment(&desc);
   s.set_environment(std::move(env));

@@ -2,6 +2,8 @@
 #include "render/scene_portals.h"
 
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace envpis::render {
 
@@ -39,22 +41,66 @@ Quad parse_quad(const nlohmann::json& p, const std::string& file, const std::str
 
 }  // namespace
 
-Portals parse_portals(const nlohmann::json& portals, const std::string& file) {
+void add_portal(Portals& out, const Quad& q, const std::string& context) {
+  try {
+    out.add(q);  // the library's checks: degenerate, non-planar, non-convex, too many
+  } catch (const Error& e) {
+    std::string m = e.what();  // "portal i: cause": the caller's own name for it replaces the prefix
+    const std::size_t k = m.find(": ");
+    if (m.rfind("portal ", 0) == 0 && k != std::string::npos) m = m.substr(k + 2);
+    throw Error(context + ": " + m);
+  }
+}
+
+Portals parse_portals(const nlohmann::json& portals, const std::string& file, Portals out) {
   if (!portals.is_array()) fail(file, "portals", "expected an array of quads");
-  Portals out;
   for (std::size_t i = 0; i < portals.size(); ++i) {
     const std::string where = "portals[" + std::to_string(i) + "]";
-    const Quad q = parse_quad(portals[i], file, where);
-    try {
-      out.add(q);  // the library's checks: degenerate, non-planar, non-convex, too many
-    } catch (const Error& e) {
-      std::string m = e.what();  // "portal i: cause": the file's own name for it replaces the prefix
-      const std::size_t k = m.find(": ");
-      if (m.rfind("portal ", 0) == 0 && k != std::string::npos) m = m.substr(k + 2);
-      fail(file, where, m);
-    }
+    add_portal(out, parse_quad(portals[i], file, where), file + ": " + where);
   }
   return out;
+}
+
+Quad quad_from_triangles(const std::vector<Vec3>& positions, const std::vector<std::uint32_t>& indices) {
+  // Vertices are merged by exact position: a quad exported as two triangles often repeats its shared
+  // corners (split normals or UVs), and the same source corner transforms to the same floats.
+  std::map<std::tuple<float, float, float>, int> id_of;
+  std::vector<Vec3> corners;
+  std::vector<int> id(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const Vec3 p = positions[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) throw Error("a non-finite vertex position");
+    auto [it, fresh] = id_of.emplace(std::make_tuple(p.x, p.y, p.z), int(corners.size()));
+    if (fresh) corners.push_back(p);
+    id[i] = it->second;
+  }
+  if (corners.size() != 4)
+    throw Error("not a quad (" + std::to_string(corners.size()) + " distinct vertices, expected 4)");
+  // Directed edges of the triangles; the boundary is the edges whose reverse no triangle has.
+  std::map<std::pair<int, int>, int> edges;
+  for (std::size_t t = 0; t + 2 < indices.size(); t += 3)
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t a = indices[t + std::size_t(e)], b = indices[t + std::size_t((e + 1) % 3)];
+      if (a >= id.size() || b >= id.size()) throw Error("not a quad (a vertex index out of range)");
+      if (id[a] != id[b]) ++edges[{id[a], id[b]}];
+    }
+  int next[4] = {-1, -1, -1, -1};
+  for (const auto& [e, count] : edges)
+    if (count > 1) throw Error("not a quad (its triangles overlap or are wound inconsistently)");
+  for (const auto& [e, count] : edges) {
+    if (edges.count({e.second, e.first})) continue;
+    if (next[e.first] >= 0) throw Error("not a quad (its triangles do not form one loop of 4 edges)");
+    next[e.first] = e.second;
+  }
+  Quad q;
+  int v = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (next[v] < 0 || (k < 3 && next[v] == 0)) throw Error("not a quad (its triangles do not form one loop of 4 edges)");
+    q.v[k] = corners[std::size_t(v)];
+    v = next[v];
+  }
+  if (v != 0) throw Error("not a quad (its triangles do not form one loop of 4 edges)");
+  return q;
 }
 
 }  // namespace envpis::render

@@ -11,7 +11,9 @@
 # --env MAP --env-filter nearest --integrator path --max-depth D`:
 # - glTF objects through Blender's own importer (bpy.ops.import_scene.gltf), which turns +Y up into +Z
 #   up as envpis does, (x, y, z) -> (x, -z, y); then the scene's scale, rotate (X, then Y, then Z) and
-#   translate, through a parent empty: Blender's object matrix is T Rz Ry Rx S, envpis's order.
+#   translate, through a parent empty: Blender's object matrix is T Rz Ry Rx S, envpis's order. A glTF
+#   portal node (named "portal...") becomes Cycles' portal: a rectangular area light marked is_portal
+#   over the same quad (portal_light), not geometry.
 # - spheres as Geometry-Nodes points (Cycles intersects exact spheres, scripts/cycles_scene.py), except
 #   transmissive ones: a fine smooth mesh, because a ray that starts inside a Cycles 3.x point does not
 #   hit its far side (Cycles' point_intersect_test keeps the front root only: "Always back-face culling
@@ -37,7 +39,7 @@ import sys
 import tempfile
 
 import bpy
-from mathutils import Matrix
+from mathutils import Matrix, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cycles_scene as CS  # noqa: E402  (world, settings, the point sphere, fail)
@@ -264,12 +266,52 @@ def gltf_object(name, o, mat):
         if x.parent is None:  # its matrix_basis (the converted node transform) now sits under the empty
             x.parent = empty
             x.matrix_parent_inverse = Matrix.Identity(4)
+    bpy.context.view_layer.update()
+    for x in [x for x in new if x.type == "MESH" and ES.is_portal_node(x.name)]:
+        portal_light(x)
+        new.remove(x)
+        bpy.data.objects.remove(x)
+    for x in new:
         if mat is not None and x.type == "MESH":
             for slot in range(max(1, len(x.data.materials))):
                 if slot < len(x.data.materials):
                     x.data.materials[slot] = mat
                 else:
                     x.data.materials.append(mat)
+
+
+def portal_light(obj):
+    """A glTF portal node (docs/scene-format.md, "Portals in glTF": a quad whose front face looks out of
+    the room) as Cycles' portal: a rectangular area light with is_portal over the same quad, its
+    emitting side (local -Z) looking into the room. Cycles' portals are rectangles: a quad that is not
+    one (corners off by more than 1e-4 of its size) is refused."""
+    w = obj.matrix_world
+    pts = []
+    for v in obj.data.vertices:
+        p = w @ v.co
+        if all((p - q).length > 1e-6 for q in pts):
+            pts.append(p)
+    if len(pts) != 4 or not obj.data.polygons:
+        fail("portal '%s': not a quad (%d distinct vertices)" % (obj.name, len(pts)))
+    out = (w.to_3x3().inverted().transposed() @ obj.data.polygons[0].normal).normalized()
+    center = sum(pts, Vector()) / 4
+    # The corners in order around the centre, counter-clockwise seen from outside.
+    ref = (pts[0] - center).normalized()
+    side = out.cross(ref)
+    pts.sort(key=lambda p: math.atan2((p - center).dot(side), (p - center).dot(ref)))
+    ex, ey = pts[1] - pts[0], pts[3] - pts[0]
+    size = max(ex.length, ey.length)
+    if abs(ex.dot(ey)) > 1e-4 * size * size or (pts[2] - pts[1] - ey).length > 1e-4 * size:
+        fail("portal '%s': not a rectangle (Cycles' portals are rectangular area lights)" % obj.name)
+    data = bpy.data.lights.new(obj.name, "AREA")
+    data.shape = "RECTANGLE"
+    data.size, data.size_y = ex.length, ey.length
+    data.cycles.is_portal = True
+    light = link(bpy.data.objects.new(obj.name, data))
+    x = ex.normalized()
+    y = out.cross(x)
+    light.matrix_world = Matrix(((x[0], y[0], out[0], center[0]), (x[1], y[1], out[1], center[1]),
+                                 (x[2], y[2], out[2], center[2]), (0, 0, 0, 1)))
 
 
 def quad(name, size, mat, o):

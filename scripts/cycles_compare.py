@@ -40,7 +40,9 @@ REPO = os.path.dirname(HERE)
 STUDIOLIGHTS = "/usr/share/blender/datafiles/studiolights/world"
 REF_SEED = 1000003           # the references' seed: none of the measured seeds 0 .. --seeds - 1
 ORTHO_HEIGHT = M.ORTHO_HEIGHT
-STRATEGIES = ("bsdf", "env", "mis", "mis-comp", "product", "oracle")
+STRATEGIES = ("bsdf", "env", "mis", "mis-comp", "product", "oracle",
+              # through the scene's portals (render/strategy.h); envpis refuses them on a scene without
+              "env-portal", "mis-portal", "mis-comp-portal", "product-portal")
 
 
 class Failure(Exception):

@@ -228,9 +228,15 @@ def without_draco(path, out_path):
     return out_path
 
 
+def is_portal_node(name):
+    """A glTF node that is a portal, not geometry (render/gltf.h, docs/scene-format.md)."""
+    return (name or "").startswith("portal")
+
+
 def gltf_material_count(path):
     """How many meshes envpis makes of a glTF object without a replacement material: one per material
-    its instanced primitives use (a primitive without one uses a default material)."""
+    its instanced primitives use (a primitive without one uses a default material); portal nodes are
+    not geometry."""
     j = gltf_json(path)
     meshes, used, seen = j.get("meshes", []), set(), set()
     nodes = j.get("nodes", [])
@@ -242,7 +248,7 @@ def gltf_material_count(path):
             continue
         seen.add(n)
         node = nodes[n]
-        if "mesh" in node:
+        if "mesh" in node and not is_portal_node(node.get("name")):
             for prim in meshes[node["mesh"]].get("primitives", []):
                 if prim.get("mode", 4) == 4:
                     used.add(prim.get("material", -1))

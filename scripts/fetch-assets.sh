@@ -4,13 +4,16 @@
 # @pmndrs/assets, which stores each file base64-encoded inside a .js module, and decodes them into a
 # cache outside the repository:
 #   ${ENVPIS_ASSETS:-${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets}/{bunny.glb, suzi.glb, hdri/*.exr,
-#   normals/*.webp, LICENSE}
+#   normals/*.webp, LICENSE, interiors/*.gltf}
+# The interior rooms (interiors/, issue 24) are not fetched: scripts/make-interiors.py writes them, on
+# every run (they are small, and deterministic).
 # Scene files name that directory ${ENVPIS_ASSETS} (docs/scene-format.md). Idempotent: does nothing
 # when the pinned version is already decoded. Needs node and npm (scripts/install-deps.sh).
 set -euo pipefail
 VERSION=1.7.0
 DEST=${ENVPIS_ASSETS:-${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets}
 STAMP="$DEST/.pmndrs-assets-$VERSION"
+python3 "$(dirname "$0")/make-interiors.py" "$DEST/interiors"
 if [ -f "$STAMP" ]; then
   echo "fetch-assets: @pmndrs/assets $VERSION already in $DEST"
   exit 0

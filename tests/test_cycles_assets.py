@@ -107,6 +107,22 @@ class SceneFile(unittest.TestCase):
             self.assertEqual(ES.object_id_groups(scene),
                              [("s", [0]), ("g", [1, 2, 3]), ("gltf-2", [4]), ("quad-3", [5])])
 
+    def test_portal_nodes_are_not_geometry(self):
+        # A node named portal* is a portal quad for envpis (render/gltf.h), not a mesh with an object id.
+        gltf = {"scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+                "nodes": [{"name": "walls", "mesh": 0}, {"name": "portal-east-0", "mesh": 1},
+                          {"name": "portals-not", "mesh": 2}],
+                "meshes": [{"primitives": [{"material": 0}]}, {"primitives": [{}]}, {"primitives": [{"material": 1}]}]}
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "room.gltf")
+            with open(path, "w") as f:
+                json.dump(gltf, f)
+            # "portals-not" starts with "portal" too: a portal node by the rule (docs/scene-format.md).
+            self.assertEqual(ES.gltf_material_count(path), 1)
+        self.assertTrue(ES.is_portal_node("portal"))
+        self.assertFalse(ES.is_portal_node("window-portal"))
+        self.assertFalse(ES.is_portal_node(None))
+
 
 class RegionMetrics(unittest.TestCase):
     def test_trimmed_count(self):
