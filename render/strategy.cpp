@@ -125,12 +125,14 @@ LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
       if (strategy_ == Strategy::ProductPortal) {  // exact per point: the cache's key has no p
         product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
         product_depth_ = tables.product_depth;
+        product_max_roughness_ = tables.product_max_roughness;
       }
     }
     return;
   }
   if (strategy_ == Strategy::Product && table_) {
     product_depth_ = tables.product_depth;
+    product_max_roughness_ = tables.product_max_roughness;
     if (tables.product_cache.entries > 0) {
       product_first_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
       product_deeper_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
@@ -159,13 +161,20 @@ BsdfProxy make_proxy(const ShadingContext& sc) {
 
 }  // namespace
 
+bool LightSampler::product_at(const ShadingContext& sc, const BsdfProxy& proxy) const {
+  if (product_depth_ > 0 && sc.depth >= product_depth_) return false;
+  if (!(product_max_roughness_ < kInfinity)) return true;
+  return (proxy.reflection > 0 && proxy.alpha_reflection <= product_max_roughness_) ||
+         (proxy.refraction > 0 && proxy.alpha_refraction <= product_max_roughness_);
+}
+
 void LightSampler::prepare_portals(const ShadingContext& sc) {
   product_ = nullptr;
   portal_valid_ = false;
   if (!view_ || !view_->prepare(sc.p)) return;  // no portal seen from p: BSDF samples alone
-  const bool product = strategy_ == Strategy::ProductPortal && !(product_depth_ > 0 && sc.depth >= product_depth_);
-  if (product) {
-    portal_valid_ = product_exact_->prepare(sc.n, sc.wo, make_proxy(sc), view_.get());
+  const BsdfProxy proxy = strategy_ == Strategy::ProductPortal ? make_proxy(sc) : BsdfProxy{};
+  if (strategy_ == Strategy::ProductPortal && product_at(sc, proxy)) {
+    portal_valid_ = product_exact_->prepare(sc.n, sc.wo, proxy, view_.get());
     if (portal_valid_) product_ = product_exact_.get();
   } else {
     portal_valid_ = portal_env_->prepare(*view_);
@@ -180,8 +189,8 @@ void LightSampler::prepare(const ShadingContext& sc) {
   if (strategy_ == Strategy::Product) {
     product_ = nullptr;
     if (!product_exact_ && !product_first_) return;
-    if (product_depth_ > 0 && sc.depth >= product_depth_) return;  // the table's distribution, as mis
     const BsdfProxy proxy = make_proxy(sc);
+    if (!product_at(sc, proxy)) return;  // the table's distribution, as mis
     if (product_exact_) {
       product_exact_->prepare(sc.n, sc.wo, proxy);
       product_ = product_exact_.get();

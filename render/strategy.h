@@ -91,6 +91,13 @@ struct StrategyTables {
   /// product: the product distribution at path vertices of depth < product_depth (0: at every vertex),
   /// the environment table's (as mis) deeper. A function of the vertex, so its MIS weights are exact.
   int product_depth = 0;
+  /// product: the product distribution only at vertices with a glossy lobe, the table's (as mis)
+  /// elsewhere: where the vertex's proxy has a reflection or refraction lobe of GGX alpha (widened
+  /// for a bent normal, as product uses it) at most product_max_roughness. Diffuse-only vertices and
+  /// rough lobes get the table: there product's set-up costs more than its density gains
+  /// (docs/assets.md, "Product where it pays"). A function of the vertex, so its MIS weights are
+  /// exact. Infinity: at every vertex (diffuse ones too).
+  float product_max_roughness = kInfinity;
   double build_seconds = 0;
 
   /// The options of the light table of env, mis, mis-comp and product (the oracle's table takes its
@@ -160,6 +167,9 @@ class LightSampler {
   std::unique_ptr<ProductCache> product_first_, product_deeper_;  // with one
   const ProductSampler* product_ = nullptr;                      // the current shading point's
   int product_depth_ = 0;
+  float product_max_roughness_ = kInfinity;
+  /// Whether the product distribution is used at this vertex (proxy: the vertex's, as product sees it).
+  bool product_at(const ShadingContext& sc, const BsdfProxy& proxy) const;
   std::unique_ptr<OracleSampler> oracle_;
   // The portal variants: the view at the current point, the masked environment (also product-portal's
   // beyond product_depth), whether the current point has a light sample.

@@ -164,6 +164,12 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "table's (as mis) deeper; 0: at every vertex. 0..1024")
       ->type_name("D")
       ->capture_default_str();
+  sub.add_option("--product-max-roughness", product_max_roughness,
+                 "product: the product distribution only at vertices with a reflection or refraction lobe "
+                 "of GGX alpha <= A, the environment table's (as mis) at the others (diffuse-only, rough); "
+                 "inf: at every vertex (RenderOptions' default). [0, 1] or inf")
+      ->type_name("A")
+      ->capture_default_str();
   sub.add_option("--product-cache-resolution", product_cache_resolution,
                  "product with --product-cache: K, the normal's and the view's components are rounded to "
                  "multiples of 1/K (a direction moves by at most 0.87 / K radians), 1..4095")
@@ -269,6 +275,9 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (proxy_min_alpha.empty() && o.product.cell_estimate == CellEstimate::Moments) o.product.proxy.min_alpha = 0.2f;
   o.product_cache.entries = static_cast<int>(parse_integer("--product-cache", product_cache, 0, 1024));
   o.product_depth = static_cast<int>(parse_integer("--product-depth", product_depth, 0, 1024));
+  if (product_max_roughness != "inf")
+    o.product_max_roughness = static_cast<float>(
+        parse_number_in("--product-max-roughness", product_max_roughness, 0, 1, "in [0, 1] or inf"));
   o.product_cache.resolution =
       static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
   if (!env_floor.empty())

@@ -82,6 +82,8 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (variant == Strategy::Product && base.product_cache.entries > 0)  // product-portal has no cache
     key["product_cache_resolution"] = base.product_cache.resolution;
   if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
+  if (strategy == Strategy::Product && base.product_max_roughness < render::kInfinity)
+    key["product_max_roughness"] = base.product_max_roughness;
 }
 
 }  // namespace

@@ -501,7 +501,7 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
   std::vector<Strategy> strategies;
   for (Strategy s : all_strategies())
     if (s != Strategy::Env) strategies.push_back(s);
-  const int tests = static_cast<int>((strategies.size() + 2) * objects.size());
+  const int tests = static_cast<int>((strategies.size() + 3) * objects.size());
   const double alpha = 1e-3 / tests;
   double z_max = 0;
   for (double lo = 0, hi = 10, i = 0; i < 100; ++i, z_max = lo) {
@@ -514,15 +514,19 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
     Strategy strategy;
     int cache_entries, product_depth;
     std::string label;
+    float max_roughness = kInfinity;
   };
   std::vector<Variant> variants;
   for (Strategy s : strategies) variants.push_back({s, 16, 0, to_string(s)});
   variants.push_back({Strategy::Product, 0, 0, "product, no cache"});
   variants.push_back({Strategy::Product, 16, 1, "product at depth 0 only"});
+  // Product at glossy vertices only (the coats, alpha 1e-3) and the table's at the rest.
+  variants.push_back({Strategy::Product, 16, 0, "product at alpha <= 0.1 only", 0.1f});
   for (const Variant& v : variants) {
     RenderOptions o = options(v.strategy, v.strategy == Strategy::Oracle ? 32 : 128, 42);
     o.product_cache.entries = v.cache_entries;
     o.product_depth = v.product_depth;
+    o.product_max_roughness = v.max_roughness;
     const RenderResult r = render(scene, o);
     ASSERT_EQ(r.nonfinite_pixels, 0u) << v.label;
     const auto m = object_means(r, n);

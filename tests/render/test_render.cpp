@@ -266,6 +266,52 @@ TEST(LightSampler, SampleAndPdfAgreeAndIntegrateToOne) {
   }
 }
 
+// product with --product-max-roughness: the distribution a vertex draws its light sample from is the
+// one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
+// table's elsewhere, also when glossy and other vertices alternate (no stale product distribution).
+TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
+  const EnvironmentMap& env = *test_sky();
+  StrategyTables t = StrategyTables::build(env, Strategy::Product);
+  t.product_max_roughness = 0.1f;
+  const Vec3 n{0.3f, -0.8f, 0.4f}, wo{0.1f, -1.0f, 0.3f};
+  TestPoint glossy(make_conductor_reflectance(0.05f, {0.9f, 0.9f, 0.9f}), n, wo);
+  TestPoint rough(make_conductor_reflectance(0.3f, {0.9f, 0.9f, 0.9f}), n, wo);
+  TestPoint diffuse(make_lambert({0.8f, 0.8f, 0.8f}), n, wo);
+  TestPoint bent(make_conductor_reflectance(0.08f, {0.9f, 0.9f, 0.9f}), n, wo);
+  bent.sc.cos_bent = 0.9f;  // widened to alpha 0.19: beyond the threshold, as product would see it
+  glossy.sc.depth = 3;      // the rule is by material, not depth
+  struct Case {
+    const TestPoint* point;
+    bool product;
+  };
+  const Case cases[] = {{&glossy, true}, {&diffuse, false}, {&rough, false}, {&glossy, true}, {&bent, false}};
+  for (std::size_t cache : {std::size_t{16}, std::size_t{0}}) {
+    t.product_cache.entries = static_cast<int>(cache);
+    LightSampler ls(t);
+    PixelSampler rng(SamplerKind::Independent, 1, 2, 3);
+    for (const Case& c : cases) {
+      SCOPED_TRACE("case " + std::to_string(&c - cases) + ", cache " + std::to_string(cache));
+      ls.prepare(c.point->sc);
+      ASSERT_EQ(ls.product_sampler() != nullptr, c.product);
+      int valid = 0;
+      for (int i = 0; i < 500; ++i) {
+        const DirectionSample d = ls.sample(rng.next2d());
+        if (!(d.pdf > 0)) continue;
+        ++valid;
+        const float expected = c.product ? ls.product_sampler()->pdf(d.direction) : t.table->pdf(d.direction);
+        EXPECT_NEAR(d.pdf, expected, 1e-4f * expected);
+        EXPECT_NEAR(ls.pdf(d.direction), expected, 1e-4f * expected);
+      }
+      EXPECT_GT(valid, 450);
+    }
+  }
+  // Infinity (the default): product at every vertex, the diffuse one too.
+  t.product_max_roughness = kInfinity;
+  LightSampler every(t);
+  every.prepare(diffuse.sc);
+  EXPECT_NE(every.product_sampler(), nullptr);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Closed surfaces (render/scene.h): which transmissive materials get the closed-surface proxy
 
@@ -679,6 +725,9 @@ TEST(Command, RejectsBadOptionsWithOneLineErrors) {
       {"--clamp-indirect nan --out " + out, "--clamp-indirect: expected a finite number, got 'nan'"},
       {"--filter-glossy -1 --out " + out, "--filter-glossy: must be >= 0 (0: off), got '-1'"},
       {"--caustics glass --out " + out, "--caustics: unknown caustics 'glass'"},
+      {"--product-max-roughness 2 --out " + out, "--product-max-roughness: must be in [0, 1] or inf, got '2'"},
+      {"--product-max-roughness glossy --out " + out, "--product-max-roughness: expected a finite number, got 'glossy'"},
+      {"--product-max-roughness -0.1 --out " + out, "--product-max-roughness: must be in [0, 1] or inf"},
   };
   std::vector<std::pair<std::string, std::string>> render_cases;
   for (const auto& [args, expect] : cases) render_cases.emplace_back("render " + args, expect);
