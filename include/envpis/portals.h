@@ -40,8 +40,13 @@
 
 #include "envpis/common.h"
 #include "envpis/importance_table.h"
+#include "envpis/simd.h"
 
 namespace envpis {
+
+namespace detail {
+struct Kernels;
+}
 
 /// A planar convex quad: its vertices in order around it, counter-clockwise seen from the environment
 /// (outside the room), so that its normal (v1 - v0) x (v2 - v1) points out, towards the environment.
@@ -86,6 +91,7 @@ PortalEstimate parse_portal_estimate(const std::string& s);  ///< "cone" | "grid
 struct PortalViewOptions {
   PortalEstimate estimate = PortalEstimate::Cone;
   int grid = 4;  ///< K for PortalEstimate::Grid, 1..16
+  Simd simd = Simd::Best;  ///< instruction set of the top cells' pass (envpis/simd.h)
 };
 
 class PortalView {
@@ -125,7 +131,6 @@ class PortalView {
     float cos_p, sin_p;
     bool wide;         // wider than 90 degrees: no use as a bound
   };
-  float cone_share(const Seen& s, int c) const;
   // Bit i set: cone not outside seen portal i; `inside`: inside one of them.
   unsigned classify(const Cone& cone, bool& inside) const;
   float cone_fraction(const Cone& cone) const;
@@ -139,14 +144,11 @@ class PortalView {
   Vec3 p_;
   std::vector<Seen> seen_;  // the portals p sees (not edge-on)
   std::vector<float> v_;    // V[c], padded like the table's top level
-  // The top cells' cones as arrays (axis, 1 / sin, the outside and inside thresholds), for cone_pass.
+  // The top cells' cones as padded arrays for the kernel (src/kernels.h, PortalCellArrays).
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
   std::vector<float> cos_, sin_, big_;
-  std::vector<std::uint8_t> near_;  // per cell: 1 when near the portal at hand (cone_pass)
   std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
-  std::vector<int> candidates_;
-  std::vector<float> gather_[6];
-  void near_cells(const Seen& s, int count);  // cos / sin of the half-angle, 4 for wide cones; scratch
+  const detail::Kernels* kernels_;  // the instruction set options.simd names
   std::vector<Vec3> grid_dirs_;  // Grid: K^2 directions per top cell, cell-major
   bool visible_ = false;
 };
