@@ -38,10 +38,10 @@ ENVPIS_INLINE V cone_plane_share(const float (&n)[4][3], V x, V y, V z, V inv_si
   return select(lo >= in_thr, V(1.0f), own);
 }
 
-template <class V>
-ENVPIS_INLINE bool any_positive(V x) {
-  if constexpr (std::is_same_v<V, float>) return x > 0.0f;
-  else return stdx::any_of(x > V(0.0f));
+ENVPIS_INLINE bool any_lane(bool m) { return m; }
+template <class M>
+ENVPIS_INLINE bool any_lane(const M& m) {
+  return stdx::any_of(m);
 }
 
 /// Every padded top cell against one seen portal: a cell whose cone misses the portal's bounding cone
@@ -57,6 +57,13 @@ __attribute__((flatten)) bool portal_shares_t(const PortalCellArrays& c, const P
     const V x = load_any<V>(c.ax + i), y = load_any<V>(c.ay + i), z = load_any<V>(c.az + i);
     const V reach = load_any<V>(c.cosb + i) * V(p.cos_p) - load_any<V>(c.sinb + i) * V(p.sin_p);
     const V gap = x * V(p.g[0]) + y * V(p.g[1]) + z * V(p.g[2]) - reach + load_any<V>(c.big + i) + V(p.near_bias);
+    if (!any_lane(gap >= V(0.0f))) {  // no cell near (most, for a window): every share 0, v unchanged
+      if (p.first) {
+        store(V(0.0f), v + i);
+        store(V(0.0f), full + i);
+      }
+      continue;
+    }
     const V share = select(gap >= V(0.0f),
                            cone_plane_share(p.n, x, y, z, load_any<V>(c.inv_sin + i), load_any<V>(c.out_thr + i),
                                             load_any<V>(c.in_thr + i), p.min_partial),
@@ -67,7 +74,7 @@ __attribute__((flatten)) bool portal_shares_t(const PortalCellArrays& c, const P
     store(select(share >= V(1.0f), V(1.0f), full_before), full + i);
     seen = vmax(seen, share);
   }
-  return any_positive(seen);
+  return any_lane(seen > V(0.0f));
 }
 
 }  // namespace envpis::detail::ENVPIS_KERNEL_NS
