@@ -98,6 +98,10 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
+  for (int i = 0; i < portals.size(); ++i) {
+    const Quad& q = portals.quad(i);
+    sizes_.push_back(std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1])));
+  }
   for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &full_})
     a->assign(padded, 0.0f);
   for (int c = 0; c < cells; ++c) {
@@ -136,7 +140,7 @@ bool PortalView::prepare(Vec3 p) {
   }
   for (int i = 0; i < portals_.size(); ++i) {
     const Quad& q = portals_.quad(i);
-    const float size = std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1]));
+    const float size = sizes_[static_cast<std::size_t>(i)];
     // Outside the room (on the environment's side) or edge-on: the portal shows p nothing.
     if (!(dot(p - q.v[0], portals_.normal(i)) < -1e-6f * size)) continue;
     const Vec3 centre = (q.v[0] + q.v[1] + q.v[2] + q.v[3]) * 0.25f - p;
@@ -153,13 +157,21 @@ bool PortalView::prepare(Vec3 p) {
     if (!ok) continue;
     // The bounding cone: around the centre's direction, out to the farthest vertex. A cone wider than
     // 90 degrees is not convex on the sphere (it might not hold the edges): then every cell is near.
+    // cos_p = min_k g . (v_k - p) / |v_k - p|, from the squares (one square root, not four).
     const Vec3 g = normalize(centre);
-    float cos_p = 1.0f;
-    for (int k = 0; k < 4; ++k) cos_p = std::min(cos_p, dot(normalize(q.v[k] - p), g));
+    float cos2_p = 1.0f;
+    bool wide = false;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 e = q.v[k] - p;
+      const float d = dot(e, g);
+      wide = wide || !(d > 0.0f);
+      cos2_p = std::min(cos2_p, d * d / dot(e, e));
+    }
+    const float cos_p = wide ? 0.0f : std::sqrt(cos2_p);
     s.g[0] = g.x, s.g[1] = g.y, s.g[2] = g.z;
     s.cos_p = cos_p;
     s.sin_p = std::sqrt(std::max(0.0f, 1.0f - cos_p * cos_p));
-    s.wide = !(cos_p > 0.0f);
+    s.wide = wide || !(cos_p > 0.0f);
     seen_.push_back(s);
   }
   if (seen_.empty()) {

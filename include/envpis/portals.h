@@ -143,6 +143,7 @@ class PortalView {
   PortalViewOptions options_;
   Vec3 p_;
   std::vector<Seen> seen_;  // the portals p sees (not edge-on)
+  std::vector<float> sizes_;  // per portal: its longer diagonal (the scale of the edge-on test)
   std::vector<float> v_;    // V[c], padded like the table's top level
   // The top cells' cones as padded arrays for the kernel (src/kernels.h, PortalCellArrays).
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
