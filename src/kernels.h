@@ -57,20 +57,19 @@ struct PortalCellArrays {
 };
 /// One portal seen from the shading point: its four edge planes' unit normals (inwards), its bounding
 /// cone (axis g, cos / sin of its half-angle), the near test's bias (the margin, or 16 for a portal wider
-/// than 90 degrees: every cell near), the least partial share, and whether it is the first portal (the
-/// kernel then overwrites the fractions instead of adding to them).
+/// than 90 degrees: every cell near) and the least partial share.
 struct PortalPlanes {
   float n[4][3];
   float g[3];
   float cos_p, sin_p, near_bias, min_partial;
-  bool first;
 };
 
 using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);
 using SphereToSquareFn = void (*)(std::size_t, const float*, const float*, const float*, float*, float*);
 using ProductWeightsFn = void (*)(const CellArrays&, const LobeParams&, float* weights);
-/// Adds one portal's shares to the fractions v and marks full cells; returns whether any is positive.
-using PortalSharesFn = bool (*)(const PortalCellArrays&, const PortalPlanes&, float* v, float* full);
+/// The fractions v of `count` portals' shares and the full cells; returns whether any is positive.
+using PortalSharesFn = bool (*)(const PortalCellArrays&, const PortalPlanes* planes, int count, float* v,
+                                float* full);
 
 struct Kernels {
   const char* name;

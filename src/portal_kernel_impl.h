@@ -44,35 +44,35 @@ ENVPIS_INLINE bool any_lane(const M& m) {
   return stdx::any_of(m);
 }
 
-/// Every padded top cell against one seen portal: a cell whose cone misses the portal's bounding cone
-/// (a . g < cos(b + b_p), less a margin; never for a wide portal, whose `near_bias` is large) gets 0,
-/// the others cone_plane_share. Adds the share to v (capped at 1; v starts at 0 when `first`), sets
-/// full to 1 where the share is 1, and returns whether any share is positive.
+/// Every padded top cell against the `count` seen portals, one load of the cells for all of them. Per
+/// portal, a cell whose cone misses the portal's bounding cone (a . g < cos(b + b_p), less a margin;
+/// never for a wide portal, whose `near_bias` is large) gets 0, the others cone_plane_share; a vector
+/// of cells none of which is near skips the planes. Writes v = min(1, sum of the shares) and full = 1
+/// where one portal's share is 1 (else 0); returns whether any v is positive.
 template <class V>
-__attribute__((flatten)) bool portal_shares_t(const PortalCellArrays& c, const PortalPlanes& p, float* v,
-                                               float* full) {
+__attribute__((flatten)) bool portal_shares_t(const PortalCellArrays& c, const PortalPlanes* planes, int count,
+                                               float* v, float* full) {
   constexpr std::size_t W = lanes<V>();
   V seen = V(0.0f);
   for (std::size_t i = 0; i < static_cast<std::size_t>(c.padded_count); i += W) {
     const V x = load_any<V>(c.ax + i), y = load_any<V>(c.ay + i), z = load_any<V>(c.az + i);
-    const V reach = load_any<V>(c.cosb + i) * V(p.cos_p) - load_any<V>(c.sinb + i) * V(p.sin_p);
-    const V gap = x * V(p.g[0]) + y * V(p.g[1]) + z * V(p.g[2]) - reach + load_any<V>(c.big + i) + V(p.near_bias);
-    if (!any_lane(gap >= V(0.0f))) {  // no cell near (most, for a window): every share 0, v unchanged
-      if (p.first) {
-        store(V(0.0f), v + i);
-        store(V(0.0f), full + i);
-      }
-      continue;
+    const V cosb = load_any<V>(c.cosb + i), sinb = load_any<V>(c.sinb + i), big = load_any<V>(c.big + i);
+    V sum = V(0.0f), whole = V(0.0f);
+    for (int j = 0; j < count; ++j) {
+      const PortalPlanes& p = planes[j];
+      const V reach = cosb * V(p.cos_p) - sinb * V(p.sin_p);
+      const V gap = x * V(p.g[0]) + y * V(p.g[1]) + z * V(p.g[2]) - reach + big + V(p.near_bias);
+      if (!any_lane(gap >= V(0.0f))) continue;  // no cell near (most, for a window): every share 0
+      const V share = select(gap >= V(0.0f),
+                             cone_plane_share(p.n, x, y, z, load_any<V>(c.inv_sin + i), load_any<V>(c.out_thr + i),
+                                              load_any<V>(c.in_thr + i), p.min_partial),
+                             V(0.0f));
+      sum = sum + share;
+      whole = select(share >= V(1.0f), V(1.0f), whole);
     }
-    const V share = select(gap >= V(0.0f),
-                           cone_plane_share(p.n, x, y, z, load_any<V>(c.inv_sin + i), load_any<V>(c.out_thr + i),
-                                            load_any<V>(c.in_thr + i), p.min_partial),
-                           V(0.0f));
-    const V before = p.first ? V(0.0f) : load_any<V>(v + i);
-    store(vmin(V(1.0f), before + share), v + i);
-    const V full_before = p.first ? V(0.0f) : load_any<V>(full + i);
-    store(select(share >= V(1.0f), V(1.0f), full_before), full + i);
-    seen = vmax(seen, share);
+    store(vmin(V(1.0f), sum), v + i);  // the same as capping after each portal: the shares are >= 0
+    store(whole, full + i);
+    seen = vmax(seen, sum);
   }
   return any_lane(seen > V(0.0f));
 }

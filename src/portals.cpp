@@ -183,29 +183,28 @@ bool PortalView::prepare(Vec3 p) {
   return visible_;
 }
 
-// Every padded top cell against every seen portal, in the kernel of options().simd
-// (src/portal_kernel_impl.h): a cell whose cone misses the portal's bounding cone, angle(a, g) > b + b_p,
-// i.e. a . g < cos b cos b_p - sin b sin b_p, gets 0 (most cells are far from a window); the others the
-// four planes. Every cell is computed (masked, not skipped): at 16 lanes that is cheaper than finding
-// the few near ones and gathering them (docs/portals.md, measured). The first portal overwrites v_ and
+// Every padded top cell against every seen portal, in one pass of the kernel of options().simd
+// (src/portal_kernel_impl.h): a cell whose cone misses a portal's bounding cone, angle(a, g) > b + b_p,
+// i.e. a . g < cos b cos b_p - sin b sin b_p, gets 0 from it (most cells are far from a window); the
+// others the four planes. Every cell is computed (masked, not skipped): at 16 lanes that is cheaper than
+// finding the few near ones and gathering them (docs/portals.md, measured). It writes every v_ and
 // full_, so they need no clearing.
 void PortalView::cone_pass() {
   const detail::PortalCellArrays cells{ax_.data(),  ay_.data(),      az_.data(),      cos_.data(),          sin_.data(),
                                        big_.data(), inv_sin_.data(), out_thr_.data(), in_thr_.data(),
                                        static_cast<int>(v_.size())};
-  bool first = true;
+  detail::PortalPlanes planes[Portals::kMaxPortals];
+  int count = 0;
   for (const Seen& s : seen_) {
-    detail::PortalPlanes planes;
-    std::memcpy(planes.n, s.n, sizeof planes.n);
-    std::memcpy(planes.g, s.g, sizeof planes.g);
-    planes.cos_p = s.cos_p;
-    planes.sin_p = s.sin_p;
-    planes.near_bias = s.wide ? 16.0f : kMargin;  // a wide bounding cone bounds nothing: every cell near
-    planes.min_partial = kMinPartial;
-    planes.first = first;
-    first = false;
-    if (kernels_->portal_shares(cells, planes, v_.data(), full_.data())) visible_ = true;
+    detail::PortalPlanes& p = planes[count++];
+    std::memcpy(p.n, s.n, sizeof p.n);
+    std::memcpy(p.g, s.g, sizeof p.g);
+    p.cos_p = s.cos_p;
+    p.sin_p = s.sin_p;
+    p.near_bias = s.wide ? 16.0f : kMargin;  // a wide bounding cone bounds nothing: every cell near
+    p.min_partial = kMinPartial;
   }
+  visible_ = kernels_->portal_shares(cells, planes, count, v_.data(), full_.data());
 }
 
 unsigned PortalView::classify(const Cone& cone, bool& inside) const {
