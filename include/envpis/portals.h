@@ -14,7 +14,7 @@
 //   inside   every plane has a . n >= sin b   (every direction of the cone passes through the quad)
 //   partial  otherwise.
 // (A cell whose cone misses a bounding cone of the portal's directions is outside too. The top cells
-// go through one vectorized pass per portal, in the instruction set PortalViewOptions::simd names.)
+// go through one vectorized pass for all portals, in the instruction set PortalViewOptions::simd names.)
 // The rule every estimate keeps: V[c] = 0 exactly when the cell is outside every portal, so a
 // direction where V is 0 provably misses every portal, and 1 when inside one. A partial cell gets
 //   Cone (default)  the product over the four planes of the share of a ball cut by a plane at signed
