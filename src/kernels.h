@@ -48,9 +48,28 @@ struct LobeParams {
   int moments;  ///< 0: the cone-closest direction (the paper's), 1: the mean direction
 };
 
+/// The portal view's top cells (PortalView, src/portals.cpp), padded like CellArrays: each cell's cone
+/// axis, cos / sin of its half-angle, `big` (4 for a cone of 90 degrees or more: always near; -64 for
+/// padding: never), 1 / sin of the half-angle and the outside / inside thresholds of the planes.
+struct PortalCellArrays {
+  const float *ax, *ay, *az, *cosb, *sinb, *big, *inv_sin, *out_thr, *in_thr;
+  int padded_count;
+};
+/// One portal seen from the shading point: its four edge planes' unit normals (inwards), its bounding
+/// cone (axis g, cos / sin of its half-angle), the near test's bias (the margin, or 16 for a portal wider
+/// than 90 degrees: every cell near) and the least partial share.
+struct PortalPlanes {
+  float n[4][3];
+  float g[3];
+  float cos_p, sin_p, near_bias, min_partial;
+};
+
 using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);
 using SphereToSquareFn = void (*)(std::size_t, const float*, const float*, const float*, float*, float*);
 using ProductWeightsFn = void (*)(const CellArrays&, const LobeParams&, float* weights);
+/// The fractions v of `count` portals' shares and the full cells; returns whether any is positive.
+using PortalSharesFn = bool (*)(const PortalCellArrays&, const PortalPlanes* planes, int count, float* v,
+                                float* full);
 
 struct Kernels {
   const char* name;
@@ -58,6 +77,7 @@ struct Kernels {
   SquareToSphereFn square_to_sphere;
   SphereToSquareFn sphere_to_square;
   ProductWeightsFn product_weights;
+  PortalSharesFn portal_shares;
 };
 
 const Kernels& kernels_scalar();

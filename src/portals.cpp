@@ -3,11 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <cstring>
 #include <string>
 
 #include "envpis/equal_area.h"
+#include "kernels.h"
+
+#define ENVPIS_KERNEL_NS scalar
+#include "portal_kernel_impl.h"
 
 namespace envpis {
 
@@ -22,14 +25,6 @@ Vec3 area_vector(const Quad& q) {
   Vec3 n;
   for (int i = 0; i < 4; ++i) n = n + cross(q.v[i], q.v[(i + 1) % 4]);
   return n;
-}
-
-// Share of a ball on the positive side of a plane at signed distance x (in radii): a smooth estimate
-// of a cone's share on one side of a plane (within 0.04 of the disk's share; see portals.h).
-inline float cut_share(float x) {
-  x = x < -1.0f ? -1.0f : x;
-  x = x > 1.0f ? 1.0f : x;
-  return 0.5f + x * (0.75f - 0.25f * x * x);
 }
 
 // The thresholds of the classification get a margin, so that round-off never calls a cell outside
@@ -97,17 +92,18 @@ PortalEstimate parse_portal_estimate(const std::string& s) {
 }
 
 PortalView::PortalView(const ImportanceTable& table, const Portals& portals, const PortalViewOptions& options)
-    : table_(&table), portals_(portals), options_(options) {
+    : table_(&table), portals_(portals), options_(options), kernels_(&detail::kernels_for(options.simd)) {
   if (options.grid < 1 || options.grid > 16) throw Error("portal grid must be in 1..16");
   const int T = table.top_resolution(), cells = table.cell_count();
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
+  for (int i = 0; i < portals.size(); ++i) {
+    const Quad& q = portals.quad(i);
+    sizes_.push_back(std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1])));
+  }
   for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &full_})
     a->assign(padded, 0.0f);
-  near_.assign(padded, 0);
-  candidates_.assign(padded, 0);
-  for (auto& g : gather_) g.assign(padded, 0.0f);
   for (int c = 0; c < cells; ++c) {
     const Cone& k = table.cell_cone(c);
     ax_[c] = k.axis.x, ay_[c] = k.axis.y, az_[c] = k.axis.z;
@@ -119,7 +115,11 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
     sin_[c] = small ? k.sin_half_angle : 0.0f;
     big_[c] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
   }
-  for (std::size_t c = static_cast<std::size_t>(cells); c < padded; ++c) big_[c] = -8.0f;  // padding: never near
+  for (std::size_t c = static_cast<std::size_t>(cells); c < padded; ++c) {  // padding: never near, never in
+    big_[c] = -64.0f;
+    out_thr_[c] = 1.0f;
+    in_thr_[c] = 2.0f;
+  }
   if (options.estimate != PortalEstimate::Grid) return;
   const int K = options.grid;
   grid_dirs_.reserve(static_cast<std::size_t>(cells) * K * K);
@@ -134,12 +134,13 @@ bool PortalView::prepare(Vec3 p) {
   p_ = p;
   visible_ = false;
   seen_.clear();
-  std::fill(v_.begin(), v_.end(), 0.0f);
-  std::fill(full_.begin(), full_.end(), 0.0f);
-  if (!finite(p)) return false;
+  if (!finite(p)) {
+    std::fill(v_.begin(), v_.end(), 0.0f);
+    return false;
+  }
   for (int i = 0; i < portals_.size(); ++i) {
     const Quad& q = portals_.quad(i);
-    const float size = std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1]));
+    const float size = sizes_[static_cast<std::size_t>(i)];
     // Outside the room (on the environment's side) or edge-on: the portal shows p nothing.
     if (!(dot(p - q.v[0], portals_.normal(i)) < -1e-6f * size)) continue;
     const Vec3 centre = (q.v[0] + q.v[1] + q.v[2] + q.v[3]) * 0.25f - p;
@@ -156,108 +157,54 @@ bool PortalView::prepare(Vec3 p) {
     if (!ok) continue;
     // The bounding cone: around the centre's direction, out to the farthest vertex. A cone wider than
     // 90 degrees is not convex on the sphere (it might not hold the edges): then every cell is near.
+    // cos_p = min_k g . (v_k - p) / |v_k - p|, from the squares (one square root, not four).
     const Vec3 g = normalize(centre);
-    float cos_p = 1.0f;
-    for (int k = 0; k < 4; ++k) cos_p = std::min(cos_p, dot(normalize(q.v[k] - p), g));
+    float cos2_p = 1.0f;
+    bool wide = false;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 e = q.v[k] - p;
+      const float d = dot(e, g);
+      wide = wide || !(d > 0.0f);
+      cos2_p = std::min(cos2_p, d * d / dot(e, e));
+    }
+    const float cos_p = wide ? 0.0f : std::sqrt(cos2_p);
     s.g[0] = g.x, s.g[1] = g.y, s.g[2] = g.z;
     s.cos_p = cos_p;
     s.sin_p = std::sqrt(std::max(0.0f, 1.0f - cos_p * cos_p));
-    s.wide = !(cos_p > 0.0f);
+    s.wide = wide || !(cos_p > 0.0f);
     seen_.push_back(s);
   }
-  if (seen_.empty()) return false;
+  if (seen_.empty()) {
+    std::fill(v_.begin(), v_.end(), 0.0f);
+    return false;
+  }
   cone_pass();  // sets visible_
   if (options_.estimate == PortalEstimate::Grid) grid_pass();
   return visible_;
 }
 
-// The near cells (candidates_[0, count)) against seen portal s, vectorized: their cones gathered into
-// scratch arrays, the branch-free estimate over those (the compiler vectorizes it with
-// -fno-trapping-math), the shares added back.
-void PortalView::near_cells(const Seen& s, int count) {
-  float* __restrict gx = gather_[0].data();
-  float* __restrict gy = gather_[1].data();
-  float* __restrict gz = gather_[2].data();
-  float* __restrict gk = gather_[3].data();
-  float* __restrict go = gather_[4].data();
-  float* __restrict gi = gather_[5].data();
-  for (int i = 0; i < count; ++i) {
-    const int c = candidates_[i];
-    gx[i] = ax_[c], gy[i] = ay_[c], gz[i] = az_[c], gk[i] = inv_sin_[c], go[i] = out_thr_[c], gi[i] = in_thr_[c];
-  }
-  const float(&m)[4][3] = s.n;
-  const float x0 = m[0][0], y0 = m[0][1], z0 = m[0][2], x1 = m[1][0], y1 = m[1][1], z1 = m[1][2];
-  const float x2 = m[2][0], y2 = m[2][1], z2 = m[2][2], x3 = m[3][0], y3 = m[3][1], z3 = m[3][2];
-  for (int i = 0; i < count; ++i) {
-    const float d0 = gx[i] * x0 + gy[i] * y0 + gz[i] * z0, d1 = gx[i] * x1 + gy[i] * y1 + gz[i] * z1;
-    const float d2 = gx[i] * x2 + gy[i] * y2 + gz[i] * z2, d3 = gx[i] * x3 + gy[i] * y3 + gz[i] * z3;
-    const float lo01 = d0 < d1 ? d0 : d1, lo23 = d2 < d3 ? d2 : d3, lo = lo01 < lo23 ? lo01 : lo23;
-    const float k = gk[i];
-    const float share = cut_share(d0 * k) * cut_share(d1 * k) * cut_share(d2 * k) * cut_share(d3 * k);
-    float own = share > kMinPartial ? share : kMinPartial;
-    own = lo < go[i] ? 0.0f : own;
-    gx[i] = lo >= gi[i] ? 1.0f : own;  // gx: the share now
-  }
-  for (int i = 0; i < count; ++i) {
-    const int c = candidates_[i];
-    // Selects, not branches (the shares fall at random: a branch mispredicts).
-    v_[c] = std::min(1.0f, v_[c] + gx[i]);
-    full_[c] = gx[i] >= 1.0f ? 1.0f : full_[c];  // the portal holds the whole cone (see grid_pass)
-    visible_ |= gx[i] > 0.0f;
-  }
-}
-
-// One cell against one seen portal: the classification by the minimum of the four dot products
-// (outside one plane: outside; inside all: inside) and the Cone estimate (portals.h).
-inline float PortalView::cone_share(const Seen& s, int c) const {
-  const float(&m)[4][3] = s.n;
-  const float x = ax_[c], y = ay_[c], z = az_[c], k = inv_sin_[c];
-  float lo = 2.0f, share = 1.0f;
-  for (int i = 0; i < 4; ++i) {
-    const float d = x * m[i][0] + y * m[i][1] + z * m[i][2];
-    lo = std::min(lo, d);
-    share *= cut_share(d * k);
-  }
-  if (lo < out_thr_[c]) return 0.0f;
-  return lo >= in_thr_[c] ? 1.0f : std::max(share, kMinPartial);
-}
-
-// Every top cell against every seen portal. Most cells are far from a portal: a first pass, which the
-// compiler vectorizes (branch-free, restrict pointers), keeps the cells whose cone meets the portal's
-// bounding cone, angle(a, g) <= b + b_p, i.e. a . g >= cos b cos b_p - sin b sin b_p; only those get
-// the four planes.
+// Every padded top cell against every seen portal, in one pass of the kernel of options().simd
+// (src/portal_kernel_impl.h): a cell whose cone misses a portal's bounding cone, angle(a, g) > b + b_p,
+// i.e. a . g < cos b cos b_p - sin b sin b_p, gets 0 from it (most cells are far from a window); the
+// others the four planes. Every cell is computed (masked, not skipped): at 16 lanes that is cheaper than
+// finding the few near ones and gathering them (docs/portals.md, measured). It writes every v_ and
+// full_, so they need no clearing.
 void PortalView::cone_pass() {
-  const int n = table_->cell_count();
-  const float* __restrict ax = ax_.data();
-  const float* __restrict ay = ay_.data();
-  const float* __restrict az = az_.data();
-  const float* __restrict cosb = cos_.data();
-  const float* __restrict sinb = sin_.data();
-  const float* __restrict big = big_.data();
-  const int padded = static_cast<int>(v_.size());  // a multiple of 16: whole words of flags
-  std::uint8_t* __restrict flag = near_.data();
+  const detail::PortalCellArrays cells{ax_.data(),  ay_.data(),      az_.data(),      cos_.data(),          sin_.data(),
+                                       big_.data(), inv_sin_.data(), out_thr_.data(), in_thr_.data(),
+                                       static_cast<int>(v_.size())};
+  detail::PortalPlanes planes[Portals::kMaxPortals];
+  int count = 0;
   for (const Seen& s : seen_) {
-    const float gx = s.g[0], gy = s.g[1], gz = s.g[2], cp = s.cos_p, sp = s.sin_p;
-    if (s.wide) {
-      for (int c = 0; c < n; ++c) {
-        const float share = cone_share(s, c);
-        v_[c] = std::min(1.0f, v_[c] + share);
-        if (share >= 1.0f) full_[c] = 1.0f;
-        if (share > 0.0f) visible_ = true;
-      }
-      continue;
-    }
-    for (int c = 0; c < padded; ++c)
-      flag[c] = ax[c] * gx + ay[c] * gy + az[c] * gz - (cosb[c] * cp - sinb[c] * sp) + big[c] + kMargin >= 0.0f;
-    // The near cells' indices: eight flags at a time, one bit each, most words zero.
-    int count = 0;
-    for (int w = 0; w < padded; w += 8) {
-      std::uint64_t bits;
-      std::memcpy(&bits, flag + w, sizeof bits);
-      for (; bits; bits &= bits - 1) candidates_[count++] = w + __builtin_ctzll(bits) / 8;
-    }
-    near_cells(s, count);
+    detail::PortalPlanes& p = planes[count++];
+    std::memcpy(p.n, s.n, sizeof p.n);
+    std::memcpy(p.g, s.g, sizeof p.g);
+    p.cos_p = s.cos_p;
+    p.sin_p = s.sin_p;
+    p.near_bias = s.wide ? 16.0f : kMargin;  // a wide bounding cone bounds nothing: every cell near
+    p.min_partial = kMinPartial;
   }
+  visible_ = kernels_->portal_shares(cells, planes, count, v_.data(), full_.data());
 }
 
 unsigned PortalView::classify(const Cone& cone, bool& inside) const {
@@ -281,21 +228,17 @@ unsigned PortalView::classify(const Cone& cone, bool& inside) const {
 }
 
 float PortalView::cone_fraction(const Cone& cone) const {
-  bool inside = false;
-  const unsigned partial = classify(cone, inside);
-  if (inside) return 1.0f;
-  const float inv_sin = cone.cos_half_angle > 0.0f && cone.sin_half_angle > 0.0f ? 1.0f / cone.sin_half_angle : 0.0f;
+  const bool small = cone.cos_half_angle > 0.0f && cone.sin_half_angle > 0.0f;  // as for the top cells
+  const float inv_sin = small ? 1.0f / cone.sin_half_angle : 0.0f;
+  const float out_thr = small ? -(cone.sin_half_angle + kMargin) : -2.0f;
+  const float in_thr = small ? cone.sin_half_angle + kMargin : 2.0f;
   float v = 0;
-  for (std::size_t i = 0; i < seen_.size(); ++i) {
-    if (!(partial >> i & 1u)) continue;
-    float share = 1.0f;
-    for (int k = 0; k < 4; ++k) {
-      const float* m = seen_[i].n[k];
-      share *= cut_share((cone.axis.x * m[0] + cone.axis.y * m[1] + cone.axis.z * m[2]) * inv_sin);
-    }
-    v += std::max(share, kMinPartial);
+  for (const Seen& s : seen_) {
+    v += detail::scalar::cone_plane_share(s.n, cone.axis.x, cone.axis.y, cone.axis.z, inv_sin, out_thr, in_thr,
+                                          kMinPartial);
+    if (v >= 1.0f) return 1.0f;
   }
-  return std::min(v, 1.0f);
+  return v;
 }
 
 // The share of `count` directions that pass through one of the portals in `mask` (the edge planes

@@ -170,6 +170,30 @@ TEST(Portals, CellFractionsAreZeroOnlyWhereNoPortalIs) {
   }
 }
 
+// The top cells' pass runs in the kernel of PortalViewOptions::simd: every instruction set this CPU
+// runs gives the scalar reference's fractions (up to FMA round-off) and keeps V > 0 wherever a
+// direction passes a portal.
+TEST(Portals, EverySimdGivesTheScalarFractions) {
+  const auto t = table(1);
+  std::mt19937_64 rng(12);
+  for (Simd simd : {Simd::SSE2, Simd::AVX2, Simd::AVX512}) {
+    if (!simd_supported(simd)) continue;
+    for (const Scene& s : scenes()) {
+      PortalView ref(*t, Portals(s.quads), {PortalEstimate::Cone, 4, Simd::Scalar});
+      PortalView view(*t, Portals(s.quads), {PortalEstimate::Cone, 4, simd});
+      ASSERT_EQ(ref.prepare(s.p), view.prepare(s.p)) << s.label;
+      for (int c = 0; c < t->cell_count(); ++c) {
+        ASSERT_NEAR(view.cell_fraction(c), ref.cell_fraction(c), 1e-4f) << s.label << " " << to_string(simd);
+        ASSERT_EQ(view.cell_fraction(c) > 0.0f, ref.cell_fraction(c) > 0.0f) << s.label << " " << to_string(simd);
+      }
+      for (int i = 0; i < 5000; ++i) {
+        const Vec3 d = random_direction(rng);
+        if (view.passes(d)) ASSERT_GT(view.cell_fraction(t->cell_of(equal_area_sphere_to_square(d))), 0.0f);
+      }
+    }
+  }
+}
+
 TEST(Portals, EnvironmentSamplerChiSquareAndIntegral) {
   const auto tables = {table(1), table(4)};
   int k = 0, tests = 2 * 2 * int(scenes().size());

@@ -13,8 +13,9 @@
 //   outside  some plane has a . n < -sin b    (no direction of the cone is on its inner side)
 //   inside   every plane has a . n >= sin b   (every direction of the cone passes through the quad)
 //   partial  otherwise.
-// (A first pass skips the cells whose cone misses a bounding cone of the portal's directions: outside
-// too.) The rule every estimate keeps: V[c] = 0 exactly when the cell is outside every portal, so a
+// (A cell whose cone misses a bounding cone of the portal's directions is outside too. The top cells
+// go through one vectorized pass for all portals, in the instruction set PortalViewOptions::simd names.)
+// The rule every estimate keeps: V[c] = 0 exactly when the cell is outside every portal, so a
 // direction where V is 0 provably misses every portal, and 1 when inside one. A partial cell gets
 //   Cone (default)  the product over the four planes of the share of a ball cut by a plane at signed
 //                   distance x = (a . n) / sin b, 1/2 + 3x/4 - x^3/4 (a smooth stand-in for the
@@ -40,8 +41,13 @@
 
 #include "envpis/common.h"
 #include "envpis/importance_table.h"
+#include "envpis/simd.h"
 
 namespace envpis {
+
+namespace detail {
+struct Kernels;
+}
 
 /// A planar convex quad: its vertices in order around it, counter-clockwise seen from the environment
 /// (outside the room), so that its normal (v1 - v0) x (v2 - v1) points out, towards the environment.
@@ -86,6 +92,7 @@ PortalEstimate parse_portal_estimate(const std::string& s);  ///< "cone" | "grid
 struct PortalViewOptions {
   PortalEstimate estimate = PortalEstimate::Cone;
   int grid = 4;  ///< K for PortalEstimate::Grid, 1..16
+  Simd simd = Simd::Best;  ///< instruction set of the top cells' pass (envpis/simd.h)
 };
 
 class PortalView {
@@ -125,7 +132,6 @@ class PortalView {
     float cos_p, sin_p;
     bool wide;         // wider than 90 degrees: no use as a bound
   };
-  float cone_share(const Seen& s, int c) const;
   // Bit i set: cone not outside seen portal i; `inside`: inside one of them.
   unsigned classify(const Cone& cone, bool& inside) const;
   float cone_fraction(const Cone& cone) const;
@@ -138,15 +144,13 @@ class PortalView {
   PortalViewOptions options_;
   Vec3 p_;
   std::vector<Seen> seen_;  // the portals p sees (not edge-on)
+  std::vector<float> sizes_;  // per portal: its longer diagonal (the scale of the edge-on test)
   std::vector<float> v_;    // V[c], padded like the table's top level
-  // The top cells' cones as arrays (axis, 1 / sin, the outside and inside thresholds), for cone_pass.
+  // The top cells' cones as padded arrays for the kernel (src/kernels.h, PortalCellArrays).
   std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
   std::vector<float> cos_, sin_, big_;
-  std::vector<std::uint8_t> near_;  // per cell: 1 when near the portal at hand (cone_pass)
   std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
-  std::vector<int> candidates_;
-  std::vector<float> gather_[6];
-  void near_cells(const Seen& s, int count);  // cos / sin of the half-angle, 4 for wide cones; scratch
+  const detail::Kernels* kernels_;  // the instruction set options.simd names
   std::vector<Vec3> grid_dirs_;  // Grid: K^2 directions per top cell, cell-major
   bool visible_ = false;
 };
