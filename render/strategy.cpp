@@ -164,6 +164,9 @@ BsdfProxy make_proxy(const ShadingContext& sc) {
 bool LightSampler::product_at(const ShadingContext& sc, const BsdfProxy& proxy) const {
   if (product_depth_ > 0 && sc.depth >= product_depth_) return false;
   if (!(product_max_roughness_ < kInfinity)) return true;
+  // A camera ray's hits repeat within a pixel, so with the cache their set-up is mostly shared: there
+  // the product pays also on rough and diffuse lobes (docs/assets.md, "The rule at the first hit").
+  if (sc.depth == 0 && product_first_) return true;
   return (proxy.reflection > 0 && proxy.alpha_reflection <= product_max_roughness_) ||
          (proxy.refraction > 0 && proxy.alpha_refraction <= product_max_roughness_);
 }

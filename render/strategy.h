@@ -95,8 +95,9 @@ struct StrategyTables {
   /// elsewhere: where the vertex's proxy has a reflection or refraction lobe of GGX alpha (widened
   /// for a bent normal, as product uses it) at most product_max_roughness. Diffuse-only vertices and
   /// rough lobes get the table: there product's set-up costs more than its density gains
-  /// (docs/assets.md, "Product where it pays"). A function of the vertex, so its MIS weights are
-  /// exact. Infinity: at every vertex (diffuse ones too).
+  /// (docs/assets.md, "Product where it pays"). With the product cache, a camera ray's hit (depth 0)
+  /// gets the product whatever its lobe: the pixel's samples share its set-up there. A function of
+  /// the vertex, so its MIS weights are exact. Infinity: at every vertex (diffuse ones too).
   float product_max_roughness = kInfinity;
   double build_seconds = 0;
 

@@ -166,8 +166,9 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--product-max-roughness", product_max_roughness,
                  "product: the product distribution only at vertices with a reflection or refraction lobe "
-                 "of GGX alpha <= A, the environment table's (as mis) at the others (diffuse-only, rough); "
-                 "inf: at every vertex (RenderOptions' default). [0, 1] or inf")
+                 "of GGX alpha <= A, the environment table's (as mis) at the others (diffuse-only, rough); with the "
+                 "product cache, a camera ray's hit always gets the product; inf: at every vertex "
+                 "(RenderOptions' default). [0, 1] or inf")
       ->type_name("A")
       ->capture_default_str();
   sub.add_option("--product-cache-resolution", product_cache_resolution,

@@ -279,26 +279,33 @@ TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
   TestPoint diffuse(make_lambert({0.8f, 0.8f, 0.8f}), n, wo);
   TestPoint bent(make_conductor_reflectance(0.08f, {0.9f, 0.9f, 0.9f}), n, wo);
   bent.sc.cos_bent = 0.9f;  // widened to alpha 0.19: beyond the threshold, as product would see it
-  glossy.sc.depth = 3;      // the rule is by material, not depth
+  TestPoint diffuse_first = diffuse;  // a camera ray's hit: product with the cache, whatever the lobe
+  diffuse_first.sc.frame = &diffuse_first.frame;
+  diffuse_first.sc.bsdf = &diffuse_first.bsdf;
+  glossy.sc.depth = 3;  // below the first hit, the rule is by material, not depth
+  diffuse.sc.depth = rough.sc.depth = bent.sc.depth = 1;
   struct Case {
     const TestPoint* point;
-    bool product;
+    bool product_with_cache, product_without;
   };
-  const Case cases[] = {{&glossy, true}, {&diffuse, false}, {&rough, false}, {&glossy, true}, {&bent, false}};
+  const Case cases[] = {{&glossy, true, true},        {&diffuse, false, false}, {&rough, false, false},
+                        {&diffuse_first, true, false}, {&glossy, true, true},    {&bent, false, false},
+                        {&diffuse_first, true, false}};
   for (std::size_t cache : {std::size_t{16}, std::size_t{0}}) {
     t.product_cache.entries = static_cast<int>(cache);
     LightSampler ls(t);
     PixelSampler rng(SamplerKind::Independent, 1, 2, 3);
     for (const Case& c : cases) {
       SCOPED_TRACE("case " + std::to_string(&c - cases) + ", cache " + std::to_string(cache));
+      const bool product = cache > 0 ? c.product_with_cache : c.product_without;
       ls.prepare(c.point->sc);
-      ASSERT_EQ(ls.product_sampler() != nullptr, c.product);
+      ASSERT_EQ(ls.product_sampler() != nullptr, product);
       int valid = 0;
       for (int i = 0; i < 500; ++i) {
         const DirectionSample d = ls.sample(rng.next2d());
         if (!(d.pdf > 0)) continue;
         ++valid;
-        const float expected = c.product ? ls.product_sampler()->pdf(d.direction) : t.table->pdf(d.direction);
+        const float expected = product ? ls.product_sampler()->pdf(d.direction) : t.table->pdf(d.direction);
         EXPECT_NEAR(d.pdf, expected, 1e-4f * expected);
         EXPECT_NEAR(ls.pdf(d.direction), expected, 1e-4f * expected);
       }
