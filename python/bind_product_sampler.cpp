@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // ProductSampler and its options: the per-shading-point API (prepare once, then sample / pdf on
 // arrays). The batched calls over many shading points are in batch.cpp.
+#include <envpis/portals.h>
 #include <envpis/product_sampler.h>
 
 #include "module.h"
@@ -13,8 +14,8 @@ namespace {
 using envpis::ProductSampler;
 using envpis::ProductSamplerOptions;
 
-bool prepare(ProductSampler& s, py::handle n, py::handle wo, py::handle proxy) {
-  return s.prepare(vec3(n, "normal"), vec3(wo, "wo"), one_proxy(proxy));
+bool prepare(ProductSampler& s, py::handle n, py::handle wo, py::handle proxy, const envpis::PortalView* view) {
+  return s.prepare(vec3(n, "normal"), vec3(wo, "wo"), one_proxy(proxy), view);
 }
 
 py::tuple sample(const ProductSampler& s, py::handle u) {
@@ -60,9 +61,11 @@ void bind_product_sampler(py::module_& m) {
                              "then sample() / pdf() any number of times. Keeps its table alive.")
       .def(py::init<const envpis::ImportanceTable&, const ProductSamplerOptions&>(), py::arg("table"),
            py::arg("options") = d, py::keep_alive<1, 2>())
-      .def("prepare", &prepare, py::arg("normal"), py::arg("wo"), py::arg("proxy"),
+      .def("prepare", &prepare, py::arg("normal"), py::arg("wo"), py::arg("proxy"), py::arg("view") = nullptr,
+           py::keep_alive<1, 5>(),
            "Builds the product distribution for a shading point (normal, outgoing direction wo, proxy: "
-           "a BsdfProxy or 7 numbers). Returns valid: False for a zero/NaN normal or wo or an empty table.")
+           "a BsdfProxy or 7 numbers; view: a PortalView prepared for the point, or None). Returns valid: "
+           "False for a zero/NaN normal or wo, an empty table, or a view that sees no portal.")
       .def("sample", &sample, py::arg("u"),
            "u (N x 2 in [0,1), or 2 numbers) -> (directions N x 3, pdfs N); pdf 0 means no sample.")
       .def(

@@ -22,5 +22,6 @@ PYBIND11_MODULE(envpis, m) {
   envpis_py::bind_bsdf_proxy(m);
   envpis_py::bind_product_sampler(m);
   envpis_py::bind_product_cache(m);
+  envpis_py::bind_portals(m);
   envpis_py::bind_batch(m);
 }

@@ -14,6 +14,7 @@ void bind_importance_table(py::module_& m);
 void bind_bsdf_proxy(py::module_& m);
 void bind_product_sampler(py::module_& m);
 void bind_product_cache(py::module_& m);
+void bind_portals(py::module_& m);
 void bind_batch(py::module_& m);
 
 }  // namespace envpis_py
