@@ -39,6 +39,15 @@ RowInput row_input(py::handle obj, const char* name, py::ssize_t cols);
 envpis::Vec3 vec3(py::handle obj, const char* name);
 py::array_t<float> vec3_array(envpis::Vec3 v);
 
+/// A table's top cells as a T x T array: value(c) for each cell c, or zeros when not valid.
+template <class Value>
+py::array_t<float> top_grid(int t, bool valid, const Value& value) {
+  py::array_t<float> out({t, t});
+  float* o = out.mutable_data();
+  for (int c = 0; c < t * t; ++c) o[c] = valid ? value(c) : 0.0f;
+  return out;
+}
+
 /// Fresh float32 arrays for results.
 py::array_t<float> new_array(py::ssize_t n);
 py::array_t<float> new_array(py::ssize_t n, py::ssize_t cols);

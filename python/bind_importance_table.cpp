@@ -41,11 +41,7 @@ py::array_t<float> importance(const ImportanceTable& t) {
 }
 
 py::array_t<float> cell_probabilities(const ImportanceTable& t) {
-  const int n = t.top_resolution();
-  py::array_t<float> out({n, n});
-  float* o = out.mutable_data();
-  for (int c = 0; c < t.cell_count(); ++c) o[c] = t.cell_probability(c);
-  return out;
+  return top_grid(t.top_resolution(), true, [&](int c) { return t.cell_probability(c); });
 }
 
 }  // namespace

@@ -35,16 +35,6 @@ std::vector<Quad> quads(py::handle obj) {
   return out;
 }
 
-/// T x T values of the top cells, value(c) for each (zeros when not valid).
-template <class Value>
-py::array_t<float> top_grid(const envpis::ImportanceTable& table, bool valid, const Value& value) {
-  const int t = table.top_resolution();
-  py::array_t<float> out({t, t});
-  float* o = out.mutable_data();
-  for (int c = 0; c < t * t; ++c) o[c] = valid ? value(c) : 0.0f;
-  return out;
-}
-
 }  // namespace
 
 void bind_portals(py::module_& m) {
@@ -111,7 +101,7 @@ void bind_portals(py::module_& m) {
       .def_property_readonly("visible", &PortalView::visible)
       .def("cell_fractions",
            [](const PortalView& v) {
-             return top_grid(v.table(), v.visible(), [&](int c) { return v.cell_fraction(c); });
+             return top_grid(v.table().top_resolution(), v.visible(), [&](int c) { return v.cell_fraction(c); });
            },
            "Each top cell's estimated visible fraction, T x T in [0, 1] (zeros when not visible).")
       .def(
@@ -137,7 +127,7 @@ void bind_portals(py::module_& m) {
           py::arg("dirs"), "Density (solid angle) of sample() at directions (N x 3, or 3 numbers); 0 where no portal is.")
       .def("cell_probabilities",
            [](const PortalEnvironmentSampler& s) {
-             return top_grid(s.table(), s.valid(), [&](int c) { return s.cell_probability(c); });
+             return top_grid(s.table().top_resolution(), s.valid(), [&](int c) { return s.cell_probability(c); });
            },
            "The prepared top-level distribution, T x T (zeros when not valid).")
       .def_property_readonly("valid", &PortalEnvironmentSampler::valid);

@@ -23,11 +23,7 @@ py::tuple sample(const ProductSampler& s, py::handle u) {
 }
 
 py::array_t<float> cell_probabilities(const ProductSampler& s) {
-  const int t = s.table().top_resolution();
-  py::array_t<float> out({t, t});
-  float* o = out.mutable_data();
-  for (int c = 0; c < t * t; ++c) o[c] = s.valid() ? s.cell_probability(c) : 0.0f;
-  return out;
+  return top_grid(s.table().top_resolution(), s.valid(), [&](int c) { return s.cell_probability(c); });
 }
 
 }  // namespace

@@ -28,27 +28,12 @@
 #include "render/render.h"
 #include "render/sampler.h"
 #include "render/scenes.h"
+#include "test_sky.h"
 
 namespace envpis::render {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// A small sky with a broad, moderately bright sun: hard enough that the strategies differ, soft
-/// enough that per-pixel sample variances are trustworthy at tens of samples.
-std::shared_ptr<const EnvironmentMap> test_sky() {
-  static const auto env = [] {
-    SkyOptions o;
-    o.width = 128;
-    o.height = 64;
-    o.sun_elevation = 25.0f;
-    o.sun_azimuth = 250.0f;  // behind and to the side of the fig1 camera (which looks along +Y)
-    o.sun_radius = 6.0f;
-    o.sun_radiance = 25.0f;
-    return std::make_shared<const EnvironmentMap>(make_procedural_sky(o));
-  }();
-  return env;
-}
 
 const Scene& small_fig1() {
   static const Scene scene = make_builtin_scene("fig1", test_sky());

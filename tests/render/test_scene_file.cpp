@@ -15,21 +15,12 @@
 #include "test_util.h"
 #include "render/render.h"
 #include "render/scenes.h"
+#include "test_sky.h"
 
 namespace envpis::render {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::shared_ptr<const EnvironmentMap> small_sky() {
-  static const auto env = [] {
-    SkyOptions o;
-    o.width = 64;
-    o.height = 32;
-    return std::make_shared<const EnvironmentMap>(make_procedural_sky(o));
-  }();
-  return env;
-}
 
 // A quick render with the renderer's defaults and a small oracle.
 RenderResult render_small(const Scene& s, Strategy st, int spp, int width, int height) {
@@ -126,7 +117,7 @@ TEST(SceneFile, ShippedScenesLoadAndRender) {
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".json") continue;
     ++count;
-    const Scene s = load_scene_file(entry.path().string(), small_sky());
+    const Scene s = load_scene_file(entry.path().string(), test_sky());
     EXPECT_GE(s.objects().size(), 3u) << entry.path();
     for (Strategy st : all_strategies()) {
       const RenderResult r = render_small(s, st, 1, 32, 8);
