@@ -220,7 +220,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   so.env_mix = mixes[in.byte(7) & 7];
   so.simd = (flags & 8) == 0 ? Simd::Best : Simd::Scalar;
   const RoughnessTransform transforms[4] = {RoughnessTransform::Hybrid, RoughnessTransform::Slides,
-                                            RoughnessTransform::Abstract, RoughnessTransform::Hybrid};
+                                            RoughnessTransform::Abstract, RoughnessTransform::Fitted};
   so.proxy.transform = transforms[(flags >> 4) & 3];
   const float min_alphas[8] = {0.35f, 0.0f, 1e-3f, 1.0f, 0.5f, 0.35f, 1e-30f, 0.01f};
   so.proxy.min_alpha = min_alphas[in.byte(8) & 7];

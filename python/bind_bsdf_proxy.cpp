@@ -57,7 +57,7 @@ void bind_bsdf_proxy(py::module_& m) {
       .def_property(
           "transform", [](const ProxyOptions& o) { return envpis::to_string(o.transform); },
           [](ProxyOptions& o, const std::string& s) { o.transform = envpis::parse_roughness_transform(s); },
-          "roughness transform: 'hybrid' (default), 'slides' or 'abstract'")
+          "roughness transform: 'hybrid' (default), 'slides', 'abstract' or 'fitted'")
       .def_readwrite("min_alpha", &ProxyOptions::min_alpha, "floor on the transformed roughness (0 disables)")
       .def_readwrite("max_alpha", &ProxyOptions::max_alpha, "cap on the transformed roughness (1 disables)");
 }

@@ -13,13 +13,35 @@ namespace envpis {
 namespace {
 bool positive(float w) { return w > 0 && std::isfinite(w); }
 float sanitize_alpha(float a) { return std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 1.0f; }
+
+#include "proxy_roughness_fit.inc"
+
+// Where x falls in the increasing grid g[0..n): index i of the cell [g[i], g[i+1]] and the fraction.
+void grid_cell(const float* g, int n, float x, int& i, float& f) {
+  x = std::clamp(x, g[0], g[n - 1]);
+  i = std::clamp(static_cast<int>(std::upper_bound(g, g + n, x) - g) - 1, 0, n - 2);
+  f = (x - g[i]) / (g[i + 1] - g[i]);
+}
+
+// The fitted a' (scripts/fit-proxy-roughness.py), bilinear in alpha and cos_o; below the grid's
+// smallest alpha, a' scales with alpha (the lobe's shape no longer changes, only its width).
+float fitted_alpha(float alpha, float cos_o) {
+  int i, j;
+  float fa, fc;
+  grid_cell(kFitAlphas, kFitAlphaCount, alpha, i, fa);
+  grid_cell(kFitCosO, kFitCosOCount, cos_o, j, fc);
+  const auto row = [&](int r) { return kFitAlphaPrime[r][j] + fc * (kFitAlphaPrime[r][j + 1] - kFitAlphaPrime[r][j]); };
+  const float a = row(i) + fa * (row(i + 1) - row(i));
+  return alpha < kFitAlphas[0] ? a * alpha / kFitAlphas[0] : a;
+}
 }  // namespace
 
 RoughnessTransform parse_roughness_transform(const std::string& s) {
   if (s == "slides") return RoughnessTransform::Slides;
   if (s == "abstract") return RoughnessTransform::Abstract;
   if (s == "hybrid") return RoughnessTransform::Hybrid;
-  throw Error("unknown roughness transform '" + s + "' (expected slides, abstract or hybrid)");
+  if (s == "fitted") return RoughnessTransform::Fitted;
+  throw Error("unknown roughness transform '" + s + "' (expected slides, abstract, hybrid or fitted)");
 }
 
 const char* to_string(RoughnessTransform t) {
@@ -27,6 +49,7 @@ const char* to_string(RoughnessTransform t) {
     case RoughnessTransform::Slides: return "slides";
     case RoughnessTransform::Abstract: return "abstract";
     case RoughnessTransform::Hybrid: return "hybrid";
+    case RoughnessTransform::Fitted: return "fitted";
   }
   return "?";
 }
@@ -124,8 +147,10 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
   // when leaving one (eta < 1, e.g. inside glass), each where it covered the true lobe better
   // (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes; docs/proxy.md).
   const bool slides_t = options.transform == RoughnessTransform::Slides ||
-                        (options.transform == RoughnessTransform::Hybrid && eta < 1.0f);
-  const float ar_t = slides_r ? 2.0f * ar : ar * std::sqrt(4.0f * cos_o);
+                        (options.transform != RoughnessTransform::Abstract && eta < 1.0f);
+  const float ar_t = options.transform == RoughnessTransform::Fitted ? fitted_alpha(ar, cos_o)
+                     : slides_r                                      ? 2.0f * ar
+                                                                     : ar * std::sqrt(4.0f * cos_o);
   float at_t = 1.0f;
   if (wt > 0)
     at_t = slides_t ? at * (cos_t + eta * cos_o) / std::max(cos_t, 1e-4f)

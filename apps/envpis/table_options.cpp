@@ -164,7 +164,7 @@ void add_table_options(CLI::App& sub, TableArgs& a) {
                  "BSDF proxy: diffuse=,translucent=,reflection=,refraction= weights, alpha_r=,alpha_t= GGX "
                  "roughness, ior= (unmentioned weights 0, roughness 0.2, ior 1.5; default reflection=1)")
       ->type_name("k=v,...");
-  sub.add_option("--transform", a.transform, "Proxy roughness transform: slides, abstract or hybrid (default: the "
+  sub.add_option("--transform", a.transform, "Proxy roughness transform: slides, abstract, hybrid or fitted (default: the "
                                              "library's)")
       ->type_name("NAME");
   sub.add_option("--min-alpha", a.min_alpha, "Floor on the transformed roughness, [0,1] (default: the "

@@ -23,6 +23,8 @@
 //   Slides:             a_r' = 2 a_r,               a_t' = a_t (cos_t + eta cos_o) / cos_t
 //   Abstract:           a_r' = a_r sqrt(4 cos_o),   a_t' = a_t (cos_t eta + cos_o) / sqrt(cos_t eta^2)
 //   Hybrid (default):   the slides' a_r'; the abstract's a_t' for eta > 1, the slides' for eta < 1
+//   Fitted:             a_r' from a table over (a_r, cos_o) fitted offline to the true GGX lobe x cos
+//                       (scripts/fit-proxy-roughness.py, src/proxy_roughness_fit.inc); a_t' as Hybrid
 // where cos_o = |N.wo|, cos_t = |N.T| and eta is the IOR seen from wo's side. The default is what
 // covers the true GGX lobes best (tests/test_bsdf_proxy.cpp, ProxyLobesCoverTheTrueGgxLobes;
 // measurements in docs/proxy.md): the abstract's a_r' is too narrow at grazing views, and for
@@ -55,8 +57,8 @@
 
 namespace envpis {
 
-enum class RoughnessTransform { Slides, Abstract, Hybrid };
-RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract" | "hybrid"
+enum class RoughnessTransform { Slides, Abstract, Hybrid, Fitted };
+RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract" | "hybrid" | "fitted"
 const char* to_string(RoughnessTransform t);
 
 struct ProxyOptions {
