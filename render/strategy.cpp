@@ -122,10 +122,17 @@ LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
     if (table_ && !table_->empty()) {
       view_ = std::make_unique<PortalView>(*table_, *portals);
       portal_env_ = std::make_unique<PortalEnvironmentSampler>(*table_);
-      if (strategy_ == Strategy::ProductPortal) {  // exact per point: the cache's key has no p
-        product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+      if (strategy_ == Strategy::ProductPortal) {
         product_depth_ = tables.product_depth;
         product_max_roughness_ = tables.product_max_roughness;
+        if (tables.product_cache.entries > 0) {  // the key gains the shading point (envpis/product_cache.h)
+          ProductCacheOptions cache = tables.product_cache;
+          cache.position_step = portal_position_step(*portals, tables.product_cache_step);
+          product_first_ = std::make_unique<ProductCache>(*table_, *portals, tables.product, cache);
+          product_deeper_ = std::make_unique<ProductCache>(*table_, *portals, tables.product, cache);
+        } else {
+          product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+        }
       }
     }
     return;
@@ -171,12 +178,28 @@ bool LightSampler::product_at(const ShadingContext& sc, const BsdfProxy& proxy) 
          (proxy.refraction > 0 && proxy.alpha_refraction <= product_max_roughness_);
 }
 
+float portal_position_step(const Portals& portals, float fraction) {
+  float smallest = kInfinity;
+  for (int i = 0; i < portals.size(); ++i) {
+    const Quad& q = portals.quad(i);
+    smallest = std::min(smallest, std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1])));
+  }
+  return smallest * fraction;
+}
+
 void LightSampler::prepare_portals(const ShadingContext& sc) {
   product_ = nullptr;
   portal_valid_ = false;
+  const bool product = strategy_ == Strategy::ProductPortal;
+  const BsdfProxy proxy = product ? make_proxy(sc) : BsdfProxy{};
+  if (product && product_first_ && product_at(sc, proxy)) {  // the cache's slots have their own views
+    const ProductSampler& s = (sc.depth == 0 ? product_first_ : product_deeper_)->prepare(sc.p, sc.n, sc.wo, proxy);
+    portal_valid_ = s.valid();
+    if (portal_valid_) product_ = &s;
+    return;
+  }
   if (!view_ || !view_->prepare(sc.p)) return;  // no portal seen from p: BSDF samples alone
-  const BsdfProxy proxy = strategy_ == Strategy::ProductPortal ? make_proxy(sc) : BsdfProxy{};
-  if (strategy_ == Strategy::ProductPortal && product_at(sc, proxy)) {
+  if (product && product_at(sc, proxy)) {
     portal_valid_ = product_exact_->prepare(sc.n, sc.wo, proxy, view_.get());
     if (portal_valid_) product_ = product_exact_.get();
   } else {
