@@ -18,8 +18,8 @@
 // (Scene::portals): env-portal, mis-portal, mis-comp-portal and product-portal use the same table as
 // env, mis, mis-comp and product, but per shading point a PortalView prepared at the hit point masks
 // it: PortalEnvironmentSampler for the first three, ProductSampler::prepare(n, wo, proxy, &view) for
-// product-portal (with the product cache, shared by the shading points whose key, now with the point p
-// rounded, is the same: envpis/product_cache.h; exactly per point without). Where the view sees no portal (or the masked
+// product-portal (with the product cache, a camera ray's hits share it when their key, with the point p
+// rounded, is the same: envpis/product_cache.h; deeper vertices, or without the cache, exactly per point). Where the view sees no portal (or the masked
 // distribution is empty) the point has no light sample and pdf() is 0, so BSDF samples carry it alone
 // (MIS weight 1): unbiased for the MIS variants even when portals miss part of an opening.
 // env-portal has no BSDF hits, so it is unbiased only when the portals cover every opening.
