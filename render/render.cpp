@@ -96,6 +96,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                                 options.light_table);
     own->product_cache = options.product_cache;
     own->product_depth = options.product_depth;
+    own->product_cache_step = options.product_cache_step;
     own->product_max_roughness = options.product_max_roughness;
     tables = &*own;
     r.setup_seconds = own->build_seconds;

@@ -122,10 +122,18 @@ LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
     if (table_ && !table_->empty()) {
       view_ = std::make_unique<PortalView>(*table_, *portals);
       portal_env_ = std::make_unique<PortalEnvironmentSampler>(*table_);
-      if (strategy_ == Strategy::ProductPortal) {  // exact per point: the cache's key has no p
-        product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+      if (strategy_ == Strategy::ProductPortal) {
         product_depth_ = tables.product_depth;
         product_max_roughness_ = tables.product_max_roughness;
+        // With the cache, a camera ray's hits share a key (the point rounded: envpis/product_cache.h);
+        // deeper vertices are prepared exactly: their keys (p and wo) almost never repeat, and a
+        // cache there only adds its misses (docs/portals.md, "The product cache through portals").
+        if (tables.product_cache.entries > 0) {
+          ProductCacheOptions cache = tables.product_cache;
+          cache.position_step = portal_position_step(*portals, tables.product_cache_step);
+          product_first_ = std::make_unique<ProductCache>(*table_, *portals, tables.product, cache);
+        }
+        product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
       }
     }
     return;
@@ -166,17 +174,35 @@ bool LightSampler::product_at(const ShadingContext& sc, const BsdfProxy& proxy) 
   if (!(product_max_roughness_ < kInfinity)) return true;
   // A camera ray's hits repeat within a pixel, so with the cache their set-up is mostly shared: there
   // the product pays also on rough and diffuse lobes (docs/assets.md, "The rule at the first hit").
-  if (sc.depth == 0 && product_first_) return true;
+  // Not through portals: there a diffuse hit's alternative is mis-portal's masked environment, which
+  // the product did not beat (docs/portals.md, "The product cache through portals").
+  if (sc.depth == 0 && product_first_ && strategy_ == Strategy::Product) return true;
   return (proxy.reflection > 0 && proxy.alpha_reflection <= product_max_roughness_) ||
          (proxy.refraction > 0 && proxy.alpha_refraction <= product_max_roughness_);
+}
+
+float portal_position_step(const Portals& portals, float fraction) {
+  float smallest = kInfinity;
+  for (int i = 0; i < portals.size(); ++i) {
+    const Quad& q = portals.quad(i);
+    smallest = std::min(smallest, std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1])));
+  }
+  return smallest * fraction;
 }
 
 void LightSampler::prepare_portals(const ShadingContext& sc) {
   product_ = nullptr;
   portal_valid_ = false;
+  const bool product = strategy_ == Strategy::ProductPortal;
+  const BsdfProxy proxy = product ? make_proxy(sc) : BsdfProxy{};
+  if (product && product_first_ && sc.depth == 0 && product_at(sc, proxy)) {  // its slots have their own views
+    const ProductSampler& s = product_first_->prepare(sc.p, sc.n, sc.wo, proxy);
+    portal_valid_ = s.valid();
+    if (portal_valid_) product_ = &s;
+    return;
+  }
   if (!view_ || !view_->prepare(sc.p)) return;  // no portal seen from p: BSDF samples alone
-  const BsdfProxy proxy = strategy_ == Strategy::ProductPortal ? make_proxy(sc) : BsdfProxy{};
-  if (strategy_ == Strategy::ProductPortal && product_at(sc, proxy)) {
+  if (product && product_at(sc, proxy)) {
     portal_valid_ = product_exact_->prepare(sc.n, sc.wo, proxy, view_.get());
     if (portal_valid_) product_ = product_exact_.get();
   } else {
@@ -206,11 +232,11 @@ void LightSampler::prepare(const ShadingContext& sc) {
 }
 
 std::uint64_t LightSampler::product_cache_hits() const {
-  return product_first_ ? product_first_->hits() + product_deeper_->hits() : 0;
+  return (product_first_ ? product_first_->hits() : 0) + (product_deeper_ ? product_deeper_->hits() : 0);
 }
 
 std::uint64_t LightSampler::product_cache_misses() const {
-  return product_first_ ? product_first_->misses() + product_deeper_->misses() : 0;
+  return (product_first_ ? product_first_->misses() : 0) + (product_deeper_ ? product_deeper_->misses() : 0);
 }
 
 DirectionSample LightSampler::sample(Point2 u) const {

@@ -18,8 +18,8 @@
 // (Scene::portals): env-portal, mis-portal, mis-comp-portal and product-portal use the same table as
 // env, mis, mis-comp and product, but per shading point a PortalView prepared at the hit point masks
 // it: PortalEnvironmentSampler for the first three, ProductSampler::prepare(n, wo, proxy, &view) for
-// product-portal (prepared exactly per point: ProductCache keys on (n, wo, proxy) only, and with
-// portals the distribution also depends on p). Where the view sees no portal (or the masked
+// product-portal (with the product cache, a camera ray's hits share it when their key, with the point p
+// rounded, is the same: envpis/product_cache.h; deeper vertices, or without the cache, exactly per point). Where the view sees no portal (or the masked
 // distribution is empty) the point has no light sample and pdf() is 0, so BSDF samples carry it alone
 // (MIS weight 1): unbiased for the MIS variants even when portals miss part of an opening.
 // env-portal has no BSDF hits, so it is unbiased only when the portals cover every opening.
@@ -91,6 +91,10 @@ struct StrategyTables {
   /// product: the product distribution at path vertices of depth < product_depth (0: at every vertex),
   /// the environment table's (as mis) deeper. A function of the vertex, so its MIS weights are exact.
   int product_depth = 0;
+  /// product-portal with the product cache: the shading point is rounded to multiples of this
+  /// fraction of the smallest portal's longer diagonal (ProductCacheOptions::position_step; the
+  /// portal's spherical polygon then moves by less than this fraction of its own angular size).
+  float product_cache_step = 1.0f / 32.0f;
   /// product: the product distribution only at vertices with a glossy lobe, the table's (as mis)
   /// elsewhere: where the vertex's proxy has a reflection or refraction lobe of GGX alpha (widened
   /// for a bent normal, as product uses it) at most product_max_roughness. Diffuse-only vertices and
@@ -129,6 +133,9 @@ struct ShadingContext {
   /// are built about the bent normal, which the geometry's horizon does not follow. 1: not bent.
   float cos_bent = 1;
 };
+
+/// The product cache's position step through `portals`: `fraction` of the smallest one's longer diagonal.
+float portal_position_step(const Portals& portals, float fraction);
 
 /// Per-thread light sampling for one strategy. Not thread-safe; create one per thread.
 class LightSampler {

@@ -9,7 +9,9 @@
 #
 # Environment: BUILD (build), SIZE (64x48), SPP (64), REF_SPP (1024), SEEDS (3), MAPS (sunrise and city
 # from the blender maps, park from the @pmndrs HDRIs), SCENES (room, two-windows),
-# INTEGRATORS (direct path). Every render runs under nice -n 19 with 2 threads.
+# INTEGRATORS (direct path), STRATEGIES (the list below, for both integrators), EXTRA (more compare
+# options, e.g. "--product-cache 0": product-portal prepared exactly per point, as before the cache
+# learnt portals). Every render runs under nice -n 19 with 2 threads.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/interiors}
@@ -32,6 +34,7 @@ for integrator in $INTEGRATORS; do
   # paths (glossy bounces) it is not a contender: direct only.
   strategies=product,mis-portal,mis-comp-portal,product-portal
   [ "$integrator" = direct ] && strategies=$strategies,env-portal
+  strategies=${STRATEGIES:-$strategies}
   for scene in $SCENES; do
     file=scenes/interior-$scene.json
     for map in $MAPS; do
@@ -41,7 +44,7 @@ for integrator in $INTEGRATORS; do
       nice -n 19 "$ENVPIS" compare --scene "$file" --env "$map" --integrator "$integrator" \
         --strategies "$strategies" --spp "$SPP" --seeds "$SEEDS" --ref-strategy mis-portal --ref-spp "$REF_SPP" \
         --width "${SIZE%x*}" --height "${SIZE#*x}" --threads 2 --no-convergence --no-analysis --no-plots \
-        --quiet --out "$OUT/$name" > "$OUT/$name.log"
+        --quiet ${EXTRA:-} --out "$OUT/$name" > "$OUT/$name.log"
     done
   done
 done

@@ -6,6 +6,8 @@
 
   window-room.gltf   4 x 5 x 2.8 m, one window in the east wall (+X), a glossy copper sphere and a
                      plastic box on a diffuse wooden floor;
+  glossy-room.gltf   window-room with glossy surfaces, as many real interiors have: satin-painted walls
+                     and ceiling (roughness 0.5) and a polished floor (0.15);
   two-windows.gltf   6 x 4 x 2.8 m, a large window in the west wall (-X) and a small one in the south
                      wall (-Y), a polished floor, a silver sphere and a box; under the blender maps
                      sunrise and city (sun at azimuth 144 degrees) the sun comes in through the large one.
@@ -216,6 +218,15 @@ def window_room():
     return materials, meshes + [copper, blocks] + portals
 
 
+def glossy_room():
+    """window_room's geometry, its diffuse surfaces made glossy (the product's case: a glossy lobe at
+    most vertices)."""
+    materials, meshes = window_room()
+    satin = material("wall", (0.8, 0.8, 0.78), 0.0, 0.5)
+    satin["doubleSided"] = True
+    return [satin, material("floor", (0.45, 0.3, 0.18), 0.0, 0.15)] + materials[2:], meshes
+
+
 def two_windows():
     """6 x 4 x 2.8 m; the west window y in [-1.2, 1.2], z in [0.5, 2.3] (4.3 m^2), the south window
     x in [0.8, 1.6], z in [1.3, 2.0] (0.56 m^2)."""
@@ -239,7 +250,7 @@ def main(argv):
         cache = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
         out = os.path.join(os.environ.get("ENVPIS_ASSETS") or os.path.join(cache, "envpis", "assets"), "interiors")
     os.makedirs(out, exist_ok=True)
-    for name, make in (("window-room", window_room), ("two-windows", two_windows)):
+    for name, make in (("window-room", window_room), ("glossy-room", glossy_room), ("two-windows", two_windows)):
         materials, meshes = make()
         path = os.path.join(out, name + ".gltf")
         Writer().write(path, materials, meshes)

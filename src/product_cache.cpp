@@ -28,6 +28,26 @@ Vec3 lattice_direction(std::uint64_t p, int k) {
   return normalize(Vec3{component(0), component(13), component(26)});
 }
 
+// A position's lattice point: each coordinate over the step rounded to nearest, offset by 2^20 into
+// three 21-bit fields; bit 63 set, so that 0 stays "no position" (a cache without portals). False when
+// a coordinate is 2^20 steps or more from the origin, or not finite.
+constexpr float kPositionRange = float(1 << 20) - 1.0f;
+bool position_point(Vec3 p, float step, std::uint64_t& out) {
+  const float c[3] = {p.x / step, p.y / step, p.z / step};
+  std::uint64_t k = std::uint64_t(1) << 63;
+  for (int i = 0; i < 3; ++i) {
+    if (!(std::fabs(c[i]) < kPositionRange)) return false;
+    const auto q = static_cast<std::int64_t>(std::floor(c[i] + 0.5f)) + (std::int64_t(1) << 20);
+    k |= static_cast<std::uint64_t>(q) << (21 * i);
+  }
+  out = k;
+  return true;
+}
+Vec3 position_of(std::uint64_t k, float step) {
+  auto c = [&](int i) { return float(static_cast<std::int64_t>((k >> (21 * i)) & 0x1fffff) - (std::int64_t(1) << 20)) * step; };
+  return {c(0), c(1), c(2)};
+}
+
 float finite_weight(float w) { return std::isfinite(w) && w > 0 ? w : 0.0f; }
 
 // A lobe weight as a fraction of the sum in 1/255 steps; a positive weight keeps at least one step.
@@ -67,6 +87,18 @@ ProductCache::ProductCache(const ImportanceTable& table, const ProductSamplerOpt
   last_use_.assign(samplers_.size(), 0);
 }
 
+ProductCache::ProductCache(const ImportanceTable& table, const Portals& portals, const ProductSamplerOptions& sampler,
+                           const ProductCacheOptions& options, const PortalViewOptions& view)
+    : ProductCache(table, sampler, options) {
+  if (portals.empty()) throw Error("product cache: no portals (use the constructor without portals)");
+  if (!(std::isfinite(options.position_step) && options.position_step > 0))
+    throw Error("product cache: position_step must be finite and > 0, got " + std::to_string(options.position_step));
+  views_.reserve(samplers_.size() + 1);  // never reallocated: the samplers keep pointers to their views
+  for (std::size_t i = 0; i <= samplers_.size(); ++i) views_.emplace_back(table, portals, view);
+  valid_.assign(samplers_.size(), 0);
+  exact_ = std::make_unique<ProductSampler>(table, sampler);
+}
+
 ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
   Key k;
   k.n = lattice_point(n, options_.resolution);
@@ -99,6 +131,7 @@ ProductCache::Rounded ProductCache::rounded(const Key& k) const {
   p.alpha_reflection = alpha_of(field(32));
   p.alpha_refraction = alpha_of(field(40));
   p.ior = ior_of(static_cast<std::uint32_t>(k.proxy >> 48));
+  r.p = k.p ? position_of(k.p, options_.position_step) : Vec3{0, 0, 0};
   return r;
 }
 
@@ -107,19 +140,64 @@ ProductCache::Rounded ProductCache::round(Vec3 n, Vec3 wo, const BsdfProxy& prox
   return rounded(key(n, wo, proxy));
 }
 
+ProductCache::Rounded ProductCache::round(Vec3 p, Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
+  if (!is_valid_direction(n) || !is_valid_direction(wo)) return {};
+  Key k = key(n, wo, proxy);
+  Rounded r = rounded(k);
+  r.p = position_point(p, options_.position_step, k.p) ? position_of(k.p, options_.position_step) : p;
+  return r;
+}
+
 const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
+  if (has_portals()) throw Error("product cache: a cache with portals needs the shading point (prepare(p, n, wo, proxy))");
   if (!is_valid_direction(n) || !is_valid_direction(wo)) {
     invalid_.prepare(n, wo, proxy);  // only invalidates
     return invalid_;
   }
-  const Key k = key(n, wo, proxy);
+  bool prepared = false;
+  const std::size_t i = slot_for(key(n, wo, proxy), prepared);
+  if (!prepared) {
+    const Rounded r = rounded(keys_[i]);  // from the key alone, so a point's distribution is its key's
+    samplers_[i].prepare(r.n, r.wo, r.proxy);
+  }
+  return samplers_[i];
+}
+
+const ProductSampler& ProductCache::prepare(Vec3 p, Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
+  if (!has_portals()) throw Error("product cache: prepare(p, n, wo, proxy) needs a cache with portals");
+  if (!is_valid_direction(n) || !is_valid_direction(wo)) {
+    invalid_.prepare(n, wo, proxy);  // only invalidates
+    return invalid_;
+  }
+  Key k = key(n, wo, proxy);
+  if (!position_point(p, options_.position_step, k.p)) return exactly(p, n, wo, proxy);
+  bool prepared = false;
+  const std::size_t i = slot_for(k, prepared);
+  if (!prepared) {
+    const Rounded r = rounded(k);
+    PortalView& view = views_[i];
+    valid_[i] = view.prepare(r.p) && samplers_[i].prepare(r.n, r.wo, r.proxy, &view);
+  }
+  return valid_[i] ? samplers_[i] : exactly(p, n, wo, proxy);
+}
+
+const ProductSampler& ProductCache::exactly(Vec3 p, Vec3 n, Vec3 wo, const BsdfProxy& proxy) {
+  ++exact_points_;
+  PortalView& view = views_.back();
+  view.prepare(p);  // when it sees nothing, the sampler's prepare leaves it invalid
+  exact_->prepare(n, wo, proxy, &view);
+  return *exact_;
+}
+
+std::size_t ProductCache::slot_for(const Key& k, bool& prepared) {
   ++clock_;
   auto holds = [&](std::size_t i) { return last_use_[i] != 0 && keys_[i] == k; };
-  auto use = [&](std::size_t i) -> ProductSampler& {
+  auto use = [&](std::size_t i) {
     last_use_[i] = clock_;
     last_ = i;
-    return samplers_[i];
+    return i;
   };
+  prepared = true;
   if (holds(last_)) {  // consecutive samples of a pixel: the usual hit
     ++hits_;
     return use(last_);
@@ -134,10 +212,8 @@ const ProductSampler& ProductCache::prepare(Vec3 n, Vec3 wo, const BsdfProxy& pr
   }
   ++misses_;
   keys_[oldest] = k;
-  const Rounded r = rounded(k);  // from the key alone, so a point's distribution is its key's
-  ProductSampler& s = use(oldest);
-  s.prepare(r.n, r.wo, r.proxy);
-  return s;
+  prepared = false;
+  return use(oldest);
 }
 
 }  // namespace envpis

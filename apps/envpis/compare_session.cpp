@@ -42,6 +42,7 @@ const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
              .first;
     it->second.product_cache = base.product_cache;
     it->second.product_depth = base.product_depth;
+    it->second.product_cache_step = base.product_cache_step;
     it->second.product_max_roughness = base.product_max_roughness;
   }
   return it->second;

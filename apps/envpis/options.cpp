@@ -176,6 +176,12 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "multiples of 1/K (a direction moves by at most 0.87 / K radians), 1..4095")
       ->type_name("B")
       ->capture_default_str();
+  sub.add_option("--product-cache-step", product_cache_step,
+                 "product-portal with --product-cache: the shading point is rounded to multiples of F times the "
+                 "smallest portal's longer diagonal (a portal then moves by less than F of its own angular size), "
+                 "(0, 1]")
+      ->type_name("F")
+      ->capture_default_str();
   sub.add_option("--env-floor", env_floor,
                  "product: every cell the proxy sees keeps at least this times its environment share, [0, 1] "
                  "(default: the library's)")
@@ -281,6 +287,9 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
         parse_number_in("--product-max-roughness", product_max_roughness, 0, 1, "in [0, 1] or inf"));
   o.product_cache.resolution =
       static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
+  o.product_cache_step = static_cast<float>(
+      parse_number_in("--product-cache-step", product_cache_step, 0, 1, "in (0, 1]"));
+  if (!(o.product_cache_step > 0)) throw Error("--product-cache-step: must be in (0, 1], got " + product_cache_step);
   if (!env_floor.empty())
     o.product.env_floor = static_cast<float>(parse_number_in("--env-floor", env_floor, 0, 1, "in [0, 1]"));
   // ENVPIS_SIMD (best, scalar, sse2, avx2, avx512) picks the product sampler's kernels, for

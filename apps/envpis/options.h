@@ -61,6 +61,7 @@ struct SceneOptionArgs {
       cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
   std::string product_cache = "16", product_cache_resolution = "64", product_depth = "0";
+  std::string product_cache_step = "0.03125";
   std::string product_max_roughness = "0.5";  // docs/assets.md, "by the vertex's material"
   // Path regularization (render/regularization.h): Cycles' clamp, caustics and filter glossy; off.
   std::string clamp_direct = "0", clamp_indirect = "0", caustics = "reflective,refractive", filter_glossy = "0";

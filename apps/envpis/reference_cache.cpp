@@ -79,8 +79,11 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product && base.product.refine) key["refine_cells"] = base.product.refine_cells;
   if (strategy == Strategy::Product && base.product.cell_estimate != CellEstimate::Cone)  // old keys: cone
     key["cell_estimate"] = to_string(base.product.cell_estimate);
-  if (variant == Strategy::Product && base.product_cache.entries > 0)  // product-portal has no cache
+  if (strategy == Strategy::Product && base.product_cache.entries > 0)
     key["product_cache_resolution"] = base.product_cache.resolution;
+  // Old keys: product-portal had no cache (and product's key has no step).
+  if (variant == Strategy::ProductPortal && base.product_cache.entries > 0)
+    key["product_cache_step"] = base.product_cache_step;
   if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
   if (strategy == Strategy::Product && base.product_max_roughness < render::kInfinity)
     key["product_max_roughness"] = base.product_max_roughness;

@@ -33,6 +33,7 @@ TEST(Interiors, RoomsAreClosedExceptThroughTheirPortals) {
   ASSERT_EQ(setenv("ENVPIS_ASSETS", dir.path.c_str(), 1), 0);
   const std::vector<Room> rooms = {
       {"interior-room.json", 1, {{0, -1.5f, 1.4f}, {-1.5f, 1.5f, 2.0f}, {1.5f, 0, 0.3f}, {1.9f, 0.5f, 1.9f}}},
+      {"interior-glossy-room.json", 1, {{0, -1.5f, 1.4f}, {-1.5f, 1.5f, 2.0f}, {1.5f, 0, 0.3f}}},
       {"interior-two-windows.json", 2, {{2, -1, 1.5f}, {-2, 0, 1.0f}, {0, 1.5f, 2.5f}, {1.2f, -1.8f, 1.6f}}}};
   std::mt19937 rng(24);
   std::uniform_real_distribution<float> uni(0.0f, 1.0f);

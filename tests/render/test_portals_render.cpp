@@ -161,6 +161,27 @@ TEST(PortalRender, LightSamplerSampleAndPdfAgreeInsideNoSampleOutside) {
   }
 }
 
+// product-portal with the product cache: a shading point's distribution is its key's (the point
+// rounded), never the first point's that filled the slot, so the image does not depend on the order
+// the pixels are visited in (tile size, threads) or on the cache's size, bit for bit.
+TEST(PortalRender, ProductCacheImageIsIndependentOfSampleOrder) {
+  const Scene s = load_scene_file(interior_file());
+  RenderOptions a = interior_options(Strategy::ProductPortal, 16, 5);
+  a.integrator = IntegratorKind::Path;
+  a.product_cache.entries = 16;
+  a.threads = 1;
+  a.tile_size = 8;
+  RenderOptions b = a;
+  b.threads = 2;
+  b.tile_size = 16;
+  b.product_cache.entries = 1;
+  const RenderResult ra = render(s, a), rb = render(s, b);
+  std::printf("product cache: %llu hits, %llu misses\n", static_cast<unsigned long long>(ra.product_cache_hits),
+              static_cast<unsigned long long>(ra.product_cache_misses));
+  EXPECT_GT(2 * ra.product_cache_hits, ra.product_cache_misses);  // the camera rays' hits share keys
+  EXPECT_EQ(ra.rgb, rb.rgb);
+}
+
 // The strategies without portals ignore them: the same image bit for bit with and without.
 TEST(PortalRender, PortalsChangeNothingForTheOtherStrategies) {
   const Scene with = load_scene_file(interior_file());
