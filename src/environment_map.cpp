@@ -184,11 +184,12 @@ Rgb EnvironmentMap::eval_texture(Point2 uv) const {
   return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
 }
 
-Rgb EnvironmentMap::eval(Vec3 d) const {
-  if (!is_valid_direction(d)) return {};
+Point2 EnvironmentMap::texture_coord(Vec3 d) const {
+  if (!is_valid_direction(d)) return {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()};
   const Vec3 m = to_map(d);
-  if (layout_ == MapLayout::EqualArea) return eval_texture(equal_area_sphere_to_square(m));
-  return eval_texture(direction_to_latlong(m));
+  return layout_ == MapLayout::EqualArea ? equal_area_sphere_to_square(m) : direction_to_latlong(m);
 }
+
+Rgb EnvironmentMap::eval(Vec3 d) const { return eval_texture(texture_coord(d)); }
 
 }  // namespace envpis

@@ -170,8 +170,8 @@ void MapTexelLevel::build_leaf_cdfs() {
   });
 }
 
-int MapTexelLevel::texel_of(Vec3 world) const {
-  const TexelCoord t = latlong_texel(direction_to_latlong(to_map_ * world), w_, h_);
+int MapTexelLevel::texel_at(Point2 uv) const {
+  const TexelCoord t = latlong_texel(uv, w_, h_);
   return t.y * w_ + t.x;
 }
 
@@ -199,18 +199,19 @@ MapTexelLevel::Sample MapTexelLevel::sample(int leaf, Point2 u) const {
   Sample out;
   out.direction = normalize(to_world_ * Vec3{s * std::cos(phi), s * std::sin(phi), z});
   out.density = imp_[t] * inv_leaf_sum_[leaf];
-  out.exact = texel_of(out.direction) == static_cast<int>(t);
+  out.texture = texture_of(out.direction);
+  out.exact = texel_at(out.texture) == static_cast<int>(t);
   return out;
 }
 
-MapTexelLevel::Located MapTexelLevel::locate(Vec3 d) const {
-  const int t = texel_of(d);
+MapTexelLevel::Located MapTexelLevel::locate_texture(Point2 uv) const {
+  const int t = texel_at(uv);
   const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
   return {static_cast<int>(leaf), imp_[static_cast<std::size_t>(t)] * inv_leaf_sum_[leaf]};
 }
 
 Point2 MapTexelLevel::invert(Vec3 d) const {
-  const int t = texel_of(d);
+  const int t = texel_at(texture_of(d));
   const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
   const auto* first = texel_.data() + start_[leaf];
   const auto* last = texel_.data() + start_[leaf + 1];

@@ -50,6 +50,7 @@ class MapTexelLevel {
     Vec3 direction;    ///< world
     float density;     ///< solid-angle density inside the leaf, importance(t) / W(leaf)
     bool exact;        ///< the direction looks up the sampled texel again (density is pdf_in_leaf's)
+    Point2 texture;    ///< the direction's lat-long coordinates (texture_of), computed for `exact`
   };
   /// A direction in leaf `leaf` (which must have a positive sum) from u in [0,1)^2.
   Sample sample(int leaf, Point2 u) const;
@@ -58,8 +59,12 @@ class MapTexelLevel {
     int leaf;       ///< the leaf the direction's texel belongs to
     float density;  ///< solid-angle density inside that leaf (0 when the leaf is empty)
   };
-  /// Where world direction d (unit) is: its texel's leaf and the density there.
-  Located locate(Vec3 d) const;
+  /// Where world direction d is: its texel's leaf and the density there.
+  Located locate(Vec3 d) const { return locate_texture(texture_of(d)); }
+  /// The same for the direction whose lat-long coordinates are `uv` (texture_of(d)).
+  Located locate_texture(Point2 uv) const;
+  /// The lat-long coordinates world direction d reads the map at: EnvironmentMap::texture_coord(d).
+  Point2 texture_of(Vec3 world) const { return direction_to_latlong(to_map_ * world); }
   /// The u that sample(locate(d).leaf, u) maps to d (up to round-off).
   Point2 invert(Vec3 d) const;
 
@@ -73,7 +78,7 @@ class MapTexelLevel {
   void compute_importance(const MapTexelOptions& options);
   void assign_leaves(int leaves);
   void build_leaf_cdfs();
-  int texel_of(Vec3 world) const;  // row-major texel index of the look-up eval makes
+  int texel_at(Point2 uv) const;  // row-major index of the texel a look-up at lat-long uv reads
   float row_solid_angle(int y) const { return row_sr_[static_cast<std::size_t>(y)]; }
 
   Mat3 to_map_, to_world_;  // the map's (the table must not keep a reference to the map)
