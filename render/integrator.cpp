@@ -134,11 +134,13 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     if (!direction_counts(wi, bs->wi.z, sn, mat.transmissive)) break;
     const Rgb beta_next = beta * bs->weight;
     Ray next{offset_ray_origin(hit.p, hit.ng, wi), normalize(wi), kInfinity};
+    // The environment's radiance along the ray before the ray is traced, so that its texel's memory read
+    // overlaps the traversal (wasted where the ray hits something); one look-up for it and the pdf.
+    const Point2 tex = env_.texture_coord(next.direction);
+    const Rgb Le = light.bsdf_hits_count() ? env_.eval_texture(tex) : Rgb{};
     SurfaceHit next_hit;
     if (!scene_.intersect(next, &next_hit)) {
       if (light.bsdf_hits_count()) {
-        const Point2 tex = env_.texture_coord(next.direction);  // one look-up for the radiance and the pdf
-        const Rgb Le = env_.eval_texture(tex);
         float w = 1.0f;
         if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction, tex));
         const Rgb c = reg.clamp(beta_next * Le * w, depth == 0);

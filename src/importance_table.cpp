@@ -402,7 +402,7 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
     out.texture = m.texture;
     // Round-off can put a direction on a texel edge into the neighbouring texel: pdf() of the
     // direction then, so that the two always agree.
-    out.pdf = m.exact ? cell.pmf * in.pmf * m.density : pdf(top, out.direction, sub);
+    out.pdf = m.exact ? cell.pmf * in.pmf * m.density : pdf(top, out.direction, m.texture, sub);
     return out;
   }
   const int F = fine_->per_cell();

@@ -75,9 +75,21 @@ class MapTexelLevel {
   std::size_t bytes_used() const;
 
  private:
+  // What a sample or a look-up reads together sits together: one cache line per texel instead of
+  // one per array (a light sample's and a pdf's texel are rarely in cache on a large map).
+  struct TexelLeaf {
+    float density;       // importance / W(leaf): the solid-angle density inside its leaf
+    std::uint32_t leaf;  // the leaf the texel belongs to
+  };
+  struct Entry {
+    float cdf;            // running sum inside the leaf, normalized, the last 1
+    std::uint32_t texel;  // row-major texel index
+  };
   void compute_importance(const MapTexelOptions& options);
   void assign_leaves(int leaves);
   void build_leaf_cdfs();
+  void build_guides();
+  const Entry* find(int leaf, float u) const;  // the entry whose cdf interval holds u
   int texel_at(Point2 uv) const;  // row-major index of the texel a look-up at lat-long uv reads
   float row_solid_angle(int y) const { return row_sr_[static_cast<std::size_t>(y)]; }
 
@@ -89,10 +101,14 @@ class MapTexelLevel {
   // that is small in its half, since near a pole cos theta is within round-off of +-1 across a row.
   std::vector<float> row_qn_, row_qs_;  // h + 1 each
   std::vector<float> imp_;              // w h: importance per texel
-  std::vector<std::uint32_t> leaf_of_;  // w h: the leaf of each texel
+  std::vector<TexelLeaf> at_;           // w h: each texel's leaf and density
   std::vector<std::uint32_t> start_;    // leaves^2 + 1: each leaf's first entry
-  std::vector<std::uint32_t> texel_;    // w h entries, leaf-major, row-major inside a leaf
-  std::vector<float> cdf_;              // w h: running sums inside each leaf, normalized, the last 1
+  std::vector<Entry> entry_;            // w h, leaf-major, row-major inside a leaf
+  // Per leaf of n entries, g + 1 = n / kGuideStride + 2 indices: guide k is the first entry whose cdf
+  // has key(cdf) >= k (key(x) = min(g - 1, floor(x g))), so the entry a u looks for lies between
+  // guides key(u) and key(u) + 1: a search of a few entries instead of log2(n) scattered reads.
+  std::vector<std::uint32_t> guide_;        // the leaves' guides, concatenated
+  std::vector<std::uint32_t> guide_start_;  // leaves^2 + 1: each leaf's first guide
   std::vector<double> leaf_sum_;        // leaves^2
   std::vector<float> inv_leaf_sum_;     // leaves^2 (0 for an empty leaf)
 };
