@@ -207,9 +207,16 @@ const MapTexelLevel::Entry* MapTexelLevel::find(int leaf, float u) const {
   const std::uint32_t n = start_[leaf + 1] - start_[leaf];
   const std::uint32_t* guide = guide_.data() + guide_start_[leaf];
   const std::uint32_t k = guide_key(u, guide_start_[leaf + 1] - guide_start_[leaf] - 1);
-  const Entry* it = std::upper_bound(first + guide[k], first + std::min(guide[k + 1] + 1, n), u,
-                                     [](float v, const Entry& e) { return v < e.cdf; });
-  return std::min(it, first + n - 1);
+  // Bisection without a data-dependent branch: the entry stays among lo[0 .. len - 1] (the last entry,
+  // of cdf 1, is above every u < 1), the comparison only selects the half.
+  const Entry* lo = first + guide[k];
+  std::uint32_t len = std::min(guide[k + 1] + 1, n) - guide[k];
+  while (len > 1) {
+    const std::uint32_t half = len / 2;
+    lo = lo[half - 1].cdf <= u ? lo + half : lo;
+    len -= half;
+  }
+  return std::min(lo, first + n - 1);
 }
 
 int MapTexelLevel::texel_at(Point2 uv) const {
