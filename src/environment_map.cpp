@@ -152,6 +152,12 @@ Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
 }
 
 TexelCoord latlong_texel(Point2 uv, int width, int height) {
+  // Every direction's look-up lands here (u in [0, 1), v in [0, 1]): without floor, the same texel as
+  // below (truncation is floor for these non-negative products; u * width can round up to width).
+  if (uv.x >= 0.0f && uv.x < 1.0f && uv.y >= 0.0f && uv.y <= 1.0f) {
+    const int xi = static_cast<int>(uv.x * width);
+    return {xi < width ? xi : xi - width, std::min(static_cast<int>(uv.y * height), height - 1)};
+  }
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
   const float fx = std::floor(uv.x * width), fy = std::floor(uv.y * height);
   // Far outside the image (only for absurd inputs) the float -> int conversion must not overflow.
