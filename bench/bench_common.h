@@ -30,6 +30,8 @@ const envpis::EnvironmentMap& sky_8k_map();
 const envpis::ImportanceTable& sunset_table();
 /// The same map's table with 4 x 4 sub-cells per top cell (the refined product's).
 const envpis::ImportanceTable& sunset_table_subcells();
+/// The same map's table on its own texels with 4 x 4 sub-cells (the renderer's default for lat-long maps).
+const envpis::ImportanceTable& sunset_table_map_texels();
 
 struct ShadingPoint {
   envpis::Vec3 n, wo;

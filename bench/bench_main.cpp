@@ -103,6 +103,16 @@ const ImportanceTable& sunset_table_subcells() {
   return t;
 }
 
+const ImportanceTable& sunset_table_map_texels() {
+  static const ImportanceTable t(sunset_map(), [] {
+    ImportanceTableOptions o;
+    o.subdivision = 4;
+    o.fine_texels = FineTexels::Map;
+    return o;
+  }());
+  return t;
+}
+
 namespace {
 Vec3 uniform_sphere(float u, float v) {
   const float z = 1.0f - 2.0f * u;

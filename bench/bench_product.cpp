@@ -217,6 +217,32 @@ void BM_EnvPdf(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 
+// The same on the table of the map's own texels (the renderer's default): a light sample, and the pdf
+// and radiance of a direction (what the renderer asks of a BSDF sample's direction that escapes).
+void BM_EnvSampleMapTexels(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table_map_texels();
+  const auto& us = uniform_points();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const DirectionSample d = table.sample(us[i++ & kMask]);
+    benchmark::DoNotOptimize(d);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+void BM_EnvPdfAndEvalMapTexels(benchmark::State& state) {
+  const ImportanceTable& table = sunset_table_map_texels();
+  const EnvironmentMap& map = sunset_map();
+  const auto& ds = uniform_directions();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Vec3 d = ds[i++ & kMask];
+    benchmark::DoNotOptimize(table.pdf(d));
+    benchmark::DoNotOptimize(map.eval(d));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
 }  // namespace
 
 BENCHMARK(BM_ProductPrepare_Scalar);
@@ -236,5 +262,7 @@ BENCHMARK(BM_ProductSample);
 BENCHMARK(BM_ProductPdf);
 BENCHMARK(BM_EnvSample);
 BENCHMARK(BM_EnvPdf);
+BENCHMARK(BM_EnvSampleMapTexels);
+BENCHMARK(BM_EnvPdfAndEvalMapTexels);
 
 }  // namespace envpis_bench

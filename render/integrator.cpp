@@ -107,9 +107,11 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
         const Vec3 wi = ls.direction;
         const Vec3 wi_l = frame.to_local(wi);
         if (direction_counts(wi, wi_l.z, sn, mat.transmissive)) {
+          // The radiance before the BSDF, so that its texel's memory read overlaps the BSDF's arithmetic;
+          // at the texture coordinate the sampler computed, when it did (no second look-up of wi).
+          const Rgb Le = env_.eval_texture(std::isfinite(ls.texture.x) ? ls.texture : env_.texture_coord(wi));
           const Rgb f = bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
           if (!is_black(f)) {
-            const Rgb Le = env_.eval(wi);
             if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
               const float w = light.uses_mis() ? mis_weight(ls.pdf, bsdf.pdf(wo_l, wi_l)) : 1.0f;
               const Rgb c = reg.clamp(beta * f * Le * (w / ls.pdf), depth == 0);
@@ -132,12 +134,15 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     if (!direction_counts(wi, bs->wi.z, sn, mat.transmissive)) break;
     const Rgb beta_next = beta * bs->weight;
     Ray next{offset_ray_origin(hit.p, hit.ng, wi), normalize(wi), kInfinity};
+    // The environment's radiance along the ray before the ray is traced, so that its texel's memory read
+    // overlaps the traversal (wasted where the ray hits something); one look-up for it and the pdf.
+    const Point2 tex = env_.texture_coord(next.direction);
+    const Rgb Le = light.bsdf_hits_count() ? env_.eval_texture(tex) : Rgb{};
     SurfaceHit next_hit;
     if (!scene_.intersect(next, &next_hit)) {
       if (light.bsdf_hits_count()) {
         float w = 1.0f;
-        if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction));
-        const Rgb Le = env_.eval(next.direction);
+        if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction, tex));
         const Rgb c = reg.clamp(beta_next * Le * w, depth == 0);
         L += c;
         if (log && log->exceeds(c.average())) {

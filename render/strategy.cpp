@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 
 namespace envpis::render {
@@ -258,12 +259,18 @@ DirectionSample LightSampler::sample(Point2 u) const {
 }
 
 float LightSampler::pdf(Vec3 wi) const {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  return pdf(wi, Point2{kNaN, kNaN});
+}
+
+float LightSampler::pdf(Vec3 wi, Point2 texture) const {
   switch (strategy_) {
     case Strategy::Bsdf: return 0;
     case Strategy::Env:
     case Strategy::Mis:
-    case Strategy::MisComp: return table_ ? table_->pdf(wi) : 0.0f;
-    case Strategy::Product: return product_ ? product_->pdf(wi) : table_ ? table_->pdf(wi) : 0.0f;
+    case Strategy::MisComp: return table_ ? table_->pdf(wi, texture) : 0.0f;
+    case Strategy::Product:
+      return product_ ? product_->pdf(wi, texture) : table_ ? table_->pdf(wi, texture) : 0.0f;
     case Strategy::Oracle: return oracle_ ? oracle_->pdf(wi) : 0.0f;
     case Strategy::EnvPortal:
     case Strategy::MisPortal:

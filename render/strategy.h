@@ -161,6 +161,9 @@ class LightSampler {
   DirectionSample sample(Point2 u) const;
   /// Density of sample() at world direction wi.
   float pdf(Vec3 wi) const;
+  /// The same, given wi's texture coordinate in the environment map the tables were built from
+  /// (EnvironmentMap::texture_coord): the table's pdf then does not look wi up again.
+  float pdf(Vec3 wi, Point2 texture) const;
 
   /// Product sampler (strategy product), for tests and diagnostics.
   const ProductSampler* product_sampler() const { return product_; }

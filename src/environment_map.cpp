@@ -152,6 +152,12 @@ Rgb EnvironmentMap::bilinear_equal_area(float x, float y) const {
 }
 
 TexelCoord latlong_texel(Point2 uv, int width, int height) {
+  // Every direction's look-up lands here (u in [0, 1), v in [0, 1]): without floor, the same texel as
+  // below (truncation is floor for these non-negative products; u * width can round up to width).
+  if (uv.x >= 0.0f && uv.x < 1.0f && uv.y >= 0.0f && uv.y <= 1.0f) {
+    const int xi = static_cast<int>(uv.x * width);
+    return {xi < width ? xi : xi - width, std::min(static_cast<int>(uv.y * height), height - 1)};
+  }
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
   const float fx = std::floor(uv.x * width), fy = std::floor(uv.y * height);
   // Far outside the image (only for absurd inputs) the float -> int conversion must not overflow.
@@ -184,11 +190,12 @@ Rgb EnvironmentMap::eval_texture(Point2 uv) const {
   return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
 }
 
-Rgb EnvironmentMap::eval(Vec3 d) const {
-  if (!is_valid_direction(d)) return {};
+Point2 EnvironmentMap::texture_coord(Vec3 d) const {
+  if (!is_valid_direction(d)) return {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()};
   const Vec3 m = to_map(d);
-  if (layout_ == MapLayout::EqualArea) return eval_texture(equal_area_sphere_to_square(m));
-  return eval_texture(direction_to_latlong(m));
+  return layout_ == MapLayout::EqualArea ? equal_area_sphere_to_square(m) : direction_to_latlong(m);
 }
+
+Rgb EnvironmentMap::eval(Vec3 d) const { return eval_texture(texture_coord(d)); }
 
 }  // namespace envpis

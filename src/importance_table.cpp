@@ -399,9 +399,10 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
     const detail::MapTexelLevel::Sample m = map_texels_->sample(leaf, in.offset);
     out.direction = m.direction;
     out.cell = c;
+    out.texture = m.texture;
     // Round-off can put a direction on a texel edge into the neighbouring texel: pdf() of the
     // direction then, so that the two always agree.
-    out.pdf = m.exact ? cell.pmf * in.pmf * m.density : pdf(top, out.direction, sub);
+    out.pdf = m.exact ? cell.pmf * in.pmf * m.density : pdf(top, out.direction, m.texture, sub);
     return out;
   }
   const int F = fine_->per_cell();
@@ -417,9 +418,16 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
 }
 
 float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub) const {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  return pdf(top, d, Point2{kNaN, kNaN}, sub);
+}
+
+float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 texture, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !is_valid_direction(d)) return 0.0f;
-  if (map_texels_) {
-    const detail::MapTexelLevel::Located at = map_texels_->locate(normalize(d));
+  if (map_texels_) {  // d as given, not normalized: the look-up eval(d) makes, which sample() checks against
+    const detail::MapTexelLevel::Located at = std::isfinite(texture.x) && std::isfinite(texture.y)
+                                                  ? map_texels_->locate_texture(texture)
+                                                  : map_texels_->locate(d);
     int c, s;
     cell_and_sub(at.leaf, c, s);
     const float cell_pmf = top.pmf(c);

@@ -52,6 +52,7 @@ MapTexelLevel::MapTexelLevel(const EnvironmentMap& map, int leaves, const MapTex
   compute_importance(options);
   assign_leaves(leaves);
   build_leaf_cdfs();
+  build_guides();
 }
 
 namespace {
@@ -170,7 +171,7 @@ void MapTexelLevel::compute_importance(const MapTexelOptions& options) {
 // sort that keeps row-major order inside each leaf, so neighbouring u pick neighbouring texels).
 void MapTexelLevel::assign_leaves(int leaves) {
   const std::size_t n = static_cast<std::size_t>(w_) * h_;
-  assign_fresh(leaf_of_, n, std::uint32_t(0));
+  assign_fresh(at_, n, TexelLeaf{0.0f, 0});
   const TexelCentres centre(w_, h_);
   parallel_for(0, h_, [&](int begin, int end) {
     for (int y = begin; y < end; ++y)
@@ -178,7 +179,7 @@ void MapTexelLevel::assign_leaves(int leaves) {
         const Point2 p = equal_area_sphere_to_square(to_world_ * centre(x, y));
         const int lx = std::clamp(static_cast<int>(p.x * float(leaves)), 0, leaves - 1);
         const int ly = std::clamp(static_cast<int>(p.y * float(leaves)), 0, leaves - 1);
-        leaf_of_[static_cast<std::size_t>(y) * w_ + x] = static_cast<std::uint32_t>(ly * leaves + lx);
+        at_[static_cast<std::size_t>(y) * w_ + x] = {0.0f, static_cast<std::uint32_t>(ly * leaves + lx)};
       }
   });
   // A counting sort over bands of rows: each band counts its texels per leaf, then writes them after
@@ -195,7 +196,7 @@ void MapTexelLevel::assign_leaves(int leaves) {
     });
   };
   for_bands([&](std::vector<std::uint32_t>& count, std::size_t t0, std::size_t t1) {
-    for (std::size_t t = t0; t < t1; ++t) ++count[leaf_of_[t]];
+    for (std::size_t t = t0; t < t1; ++t) ++count[at_[t].leaf];
   });
   start_.assign(L + 1, 0);
   for (std::size_t l = 0; l < L; ++l) {
@@ -203,22 +204,21 @@ void MapTexelLevel::assign_leaves(int leaves) {
     for (auto& band : next) run += std::exchange(band[l], run);  // the band's count becomes its offset
     start_[l + 1] = run;
   }
-  assign_fresh(texel_, n, std::uint32_t(0));
+  assign_fresh(entry_, n, Entry{0.0f, 0});
   for_bands([&](std::vector<std::uint32_t>& offset, std::size_t t0, std::size_t t1) {
-    for (std::size_t t = t0; t < t1; ++t) texel_[offset[leaf_of_[t]]++] = static_cast<std::uint32_t>(t);
+    for (std::size_t t = t0; t < t1; ++t) entry_[offset[at_[t].leaf]++] = {0.0f, static_cast<std::uint32_t>(t)};
   });
 }
 
 void MapTexelLevel::build_leaf_cdfs() {
   const int L = leaves_ * leaves_;
-  assign_fresh(cdf_, texel_.size(), 0.0f);
   leaf_sum_.assign(static_cast<std::size_t>(L), 0.0);
   inv_leaf_sum_.assign(static_cast<std::size_t>(L), 0.0f);
   parallel_for(0, L, [&](int begin, int end) {
     for (int l = begin; l < end; ++l) {
       double run = 0;
       for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
-        const std::uint32_t t = texel_[e];
+        const std::uint32_t t = entry_[e].texel;
         run += double(imp_[t]) * row_sr_[t / static_cast<std::uint32_t>(w_)];
       }
       leaf_sum_[l] = run;
@@ -226,29 +226,76 @@ void MapTexelLevel::build_leaf_cdfs() {
       inv_leaf_sum_[l] = static_cast<float>(1.0 / run);
       double acc = 0;
       for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
-        const std::uint32_t t = texel_[e];
+        const std::uint32_t t = entry_[e].texel;
         acc += double(imp_[t]) * row_sr_[t / static_cast<std::uint32_t>(w_)];
-        cdf_[e] = static_cast<float>(acc / run);
+        entry_[e].cdf = static_cast<float>(acc / run);
+        at_[t].density = imp_[t] * inv_leaf_sum_[l];
       }
-      cdf_[start_[l + 1] - 1] = 1.0f;
+      entry_[start_[l + 1] - 1].cdf = 1.0f;
     }
   });
 }
 
-int MapTexelLevel::texel_of(Vec3 world) const {
-  const TexelCoord t = latlong_texel(direction_to_latlong(to_map_ * world), w_, h_);
+namespace {
+constexpr std::uint32_t kGuideStride = 4;  // entries per guide index, on average over a leaf
+// The guide bucket of cdf value x among g: monotone in x, so guides bracket every search.
+inline std::uint32_t guide_key(float x, std::uint32_t g) {
+  return std::min(g - 1, static_cast<std::uint32_t>(x * float(g)));
+}
+}  // namespace
+
+void MapTexelLevel::build_guides() {
+  const int L = leaves_ * leaves_;
+  guide_start_.assign(static_cast<std::size_t>(L) + 1, 0);
+  for (int l = 0; l < L; ++l) guide_start_[l + 1] = guide_start_[l] + (start_[l + 1] - start_[l]) / kGuideStride + 2;
+  guide_.assign(guide_start_[L], 0);
+  parallel_for(0, L, [&](int begin, int end) {
+    for (int l = begin; l < end; ++l) {
+      const Entry* first = entry_.data() + start_[l];
+      const std::uint32_t n = start_[l + 1] - start_[l], g = guide_start_[l + 1] - guide_start_[l] - 1;
+      std::uint32_t* guide = guide_.data() + guide_start_[l];
+      std::uint32_t e = 0;
+      for (std::uint32_t k = 0; k < g; ++k) {
+        while (e < n && guide_key(first[e].cdf, g) < k) ++e;
+        guide[k] = e;
+      }
+      guide[g] = n;
+    }
+  });
+}
+
+// The first entry of the leaf with cdf > u (the last one if none), as std::upper_bound over the whole
+// leaf finds it: entries before guide k have key < k = key(u), hence cdf < u; the entry at guide k + 1
+// has key > key(u), hence cdf > u.
+const MapTexelLevel::Entry* MapTexelLevel::find(int leaf, float u) const {
+  const Entry* first = entry_.data() + start_[leaf];
+  const std::uint32_t n = start_[leaf + 1] - start_[leaf];
+  const std::uint32_t* guide = guide_.data() + guide_start_[leaf];
+  const std::uint32_t k = guide_key(u, guide_start_[leaf + 1] - guide_start_[leaf] - 1);
+  // Bisection without a data-dependent branch: the entry stays among lo[0 .. len - 1] (the last entry,
+  // of cdf 1, is above every u < 1), the comparison only selects the half.
+  const Entry* lo = first + guide[k];
+  std::uint32_t len = std::min(guide[k + 1] + 1, n) - guide[k];
+  while (len > 1) {
+    const std::uint32_t half = len / 2;
+    lo = lo[half - 1].cdf <= u ? lo + half : lo;
+    len -= half;
+  }
+  return std::min(lo, first + n - 1);
+}
+
+int MapTexelLevel::texel_at(Point2 uv) const {
+  const TexelCoord t = latlong_texel(uv, w_, h_);
   return t.y * w_ + t.x;
 }
 
 MapTexelLevel::Sample MapTexelLevel::sample(int leaf, Point2 u) const {
   ENVPIS_ASSERT(leaf >= 0 && leaf < leaves_ * leaves_ && leaf_sum_[leaf] > 0);
-  const float* first = cdf_.data() + start_[leaf];
-  const float* last = cdf_.data() + start_[leaf + 1];
   const float uy = clamp_unit(u.y);
-  const float* it = std::min(std::upper_bound(first, last, uy), last - 1);
-  const float c0 = it > first ? it[-1] : 0.0f, c1 = *it;
+  const Entry* it = find(leaf, uy);
+  const float c0 = it > entry_.data() + start_[leaf] ? it[-1].cdf : 0.0f, c1 = it->cdf;
   const float r = c1 > c0 ? clamp_unit((uy - c0) / (c1 - c0)) : 0.5f;
-  const std::uint32_t t = texel_[static_cast<std::size_t>(it - cdf_.data())];
+  const std::uint32_t t = it->texel;
   const int x = static_cast<int>(t % static_cast<std::uint32_t>(w_)), y = static_cast<int>(t / static_cast<std::uint32_t>(w_));
   // Uniform in solid angle inside the texel: azimuth linear in u.x, cos theta linear in r (through
   // q = 1 -+ cos theta, see row_qn_). Both kept a thousandth of the texel from its edges, so that the
@@ -263,24 +310,26 @@ MapTexelLevel::Sample MapTexelLevel::sample(int leaf, Point2 u) const {
   const float s = std::sqrt(std::max(0.0f, q * (2.0f - q)));
   Sample out;
   out.direction = normalize(to_world_ * Vec3{s * std::cos(phi), s * std::sin(phi), z});
-  out.density = imp_[t] * inv_leaf_sum_[leaf];
-  out.exact = texel_of(out.direction) == static_cast<int>(t);
+  out.density = at_[t].density;
+  out.texture = texture_of(out.direction);
+  out.exact = texel_at(out.texture) == static_cast<int>(t);
   return out;
 }
 
-MapTexelLevel::Located MapTexelLevel::locate(Vec3 d) const {
-  const int t = texel_of(d);
-  const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
-  return {static_cast<int>(leaf), imp_[static_cast<std::size_t>(t)] * inv_leaf_sum_[leaf]};
+MapTexelLevel::Located MapTexelLevel::locate_texture(Point2 uv) const {
+  const TexelLeaf& a = at_[static_cast<std::size_t>(texel_at(uv))];
+  return {static_cast<int>(a.leaf), a.density};
 }
 
 Point2 MapTexelLevel::invert(Vec3 d) const {
-  const int t = texel_of(d);
-  const std::uint32_t leaf = leaf_of_[static_cast<std::size_t>(t)];
-  const auto* first = texel_.data() + start_[leaf];
-  const auto* last = texel_.data() + start_[leaf + 1];
-  const std::size_t e = static_cast<std::size_t>(std::lower_bound(first, last, static_cast<std::uint32_t>(t)) - texel_.data());
-  const float c0 = e > start_[leaf] ? cdf_[e - 1] : 0.0f, c1 = cdf_[e];
+  const int t = texel_at(texture_of(d));
+  const std::uint32_t leaf = at_[static_cast<std::size_t>(t)].leaf;
+  const Entry* first = entry_.data() + start_[leaf];
+  const Entry* last = entry_.data() + start_[leaf + 1];
+  const std::size_t e = static_cast<std::size_t>(
+      std::lower_bound(first, last, static_cast<std::uint32_t>(t), [](const Entry& a, std::uint32_t v) { return a.texel < v; }) -
+      entry_.data());
+  const float c0 = e > start_[leaf] ? entry_[e - 1].cdf : 0.0f, c1 = entry_[e].cdf;
   const int x = t % w_, y = t / w_;
   const Vec3 m = to_map_ * d;
   // q of the direction as sample() computes it: 1 - z north, 1 + z south, from the polar angle.
@@ -301,7 +350,7 @@ std::vector<DirectionSums> MapTexelLevel::leaf_directions() const {
   parallel_for(0, L, [&](int begin, int end) {  // each leaf from its own texel list: no shared sums
     for (int l = begin; l < end; ++l)
       for (std::uint32_t e = start_[l]; e < start_[l + 1]; ++e) {
-        const std::uint32_t t = texel_[e];
+        const std::uint32_t t = entry_[e].texel;
         const int x = static_cast<int>(t % static_cast<std::uint32_t>(w_)), y = static_cast<int>(t / static_cast<std::uint32_t>(w_));
         out[static_cast<std::size_t>(l)].add(to_world_ * centre(x, y), double(imp_[t]) * row_sr_[y], row_sr_[y]);
       }
@@ -310,9 +359,11 @@ std::vector<DirectionSums> MapTexelLevel::leaf_directions() const {
 }
 
 std::size_t MapTexelLevel::bytes_used() const {
-  return sizeof(*this) + (row_sr_.capacity() + row_qn_.capacity() + row_qs_.capacity() + imp_.capacity() + cdf_.capacity() +
-                          inv_leaf_sum_.capacity()) * sizeof(float) +
-         (leaf_of_.capacity() + start_.capacity() + texel_.capacity()) * sizeof(std::uint32_t) +
+  return sizeof(*this) +
+         (row_sr_.capacity() + row_qn_.capacity() + row_qs_.capacity() + imp_.capacity() + inv_leaf_sum_.capacity()) *
+             sizeof(float) +
+         at_.capacity() * sizeof(TexelLeaf) + entry_.capacity() * sizeof(Entry) +
+         (start_.capacity() + guide_.capacity() + guide_start_.capacity()) * sizeof(std::uint32_t) +
          leaf_sum_.capacity() * sizeof(double);
 }
 

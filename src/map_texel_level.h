@@ -50,6 +50,7 @@ class MapTexelLevel {
     Vec3 direction;    ///< world
     float density;     ///< solid-angle density inside the leaf, importance(t) / W(leaf)
     bool exact;        ///< the direction looks up the sampled texel again (density is pdf_in_leaf's)
+    Point2 texture;    ///< the direction's lat-long coordinates (texture_of), computed for `exact`
   };
   /// A direction in leaf `leaf` (which must have a positive sum) from u in [0,1)^2.
   Sample sample(int leaf, Point2 u) const;
@@ -58,8 +59,12 @@ class MapTexelLevel {
     int leaf;       ///< the leaf the direction's texel belongs to
     float density;  ///< solid-angle density inside that leaf (0 when the leaf is empty)
   };
-  /// Where world direction d (unit) is: its texel's leaf and the density there.
-  Located locate(Vec3 d) const;
+  /// Where world direction d is: its texel's leaf and the density there.
+  Located locate(Vec3 d) const { return locate_texture(texture_of(d)); }
+  /// The same for the direction whose lat-long coordinates are `uv` (texture_of(d)).
+  Located locate_texture(Point2 uv) const;
+  /// The lat-long coordinates world direction d reads the map at: EnvironmentMap::texture_coord(d).
+  Point2 texture_of(Vec3 world) const { return direction_to_latlong(to_map_ * world); }
   /// The u that sample(locate(d).leaf, u) maps to d (up to round-off).
   Point2 invert(Vec3 d) const;
 
@@ -70,10 +75,22 @@ class MapTexelLevel {
   std::size_t bytes_used() const;
 
  private:
+  // What a sample or a look-up reads together sits together: one cache line per texel instead of
+  // one per array (a light sample's and a pdf's texel are rarely in cache on a large map).
+  struct TexelLeaf {
+    float density;       // importance / W(leaf): the solid-angle density inside its leaf
+    std::uint32_t leaf;  // the leaf the texel belongs to
+  };
+  struct Entry {
+    float cdf;            // running sum inside the leaf, normalized, the last 1
+    std::uint32_t texel;  // row-major texel index
+  };
   void compute_importance(const MapTexelOptions& options);
   void assign_leaves(int leaves);
   void build_leaf_cdfs();
-  int texel_of(Vec3 world) const;  // row-major texel index of the look-up eval makes
+  void build_guides();
+  const Entry* find(int leaf, float u) const;  // the entry whose cdf interval holds u
+  int texel_at(Point2 uv) const;  // row-major index of the texel a look-up at lat-long uv reads
   float row_solid_angle(int y) const { return row_sr_[static_cast<std::size_t>(y)]; }
 
   Mat3 to_map_, to_world_;  // the map's (the table must not keep a reference to the map)
@@ -84,10 +101,14 @@ class MapTexelLevel {
   // that is small in its half, since near a pole cos theta is within round-off of +-1 across a row.
   std::vector<float> row_qn_, row_qs_;  // h + 1 each
   std::vector<float> imp_;              // w h: importance per texel
-  std::vector<std::uint32_t> leaf_of_;  // w h: the leaf of each texel
+  std::vector<TexelLeaf> at_;           // w h: each texel's leaf and density
   std::vector<std::uint32_t> start_;    // leaves^2 + 1: each leaf's first entry
-  std::vector<std::uint32_t> texel_;    // w h entries, leaf-major, row-major inside a leaf
-  std::vector<float> cdf_;              // w h: running sums inside each leaf, normalized, the last 1
+  std::vector<Entry> entry_;            // w h, leaf-major, row-major inside a leaf
+  // Per leaf of n entries, g + 1 = n / kGuideStride + 2 indices: guide k is the first entry whose cdf
+  // has key(cdf) >= k (key(x) = min(g - 1, floor(x g))), so the entry a u looks for lies between
+  // guides key(u) and key(u) + 1: a search of a few entries instead of log2(n) scattered reads.
+  std::vector<std::uint32_t> guide_;        // the leaves' guides, concatenated
+  std::vector<std::uint32_t> guide_start_;  // leaves^2 + 1: each leaf's first guide
   std::vector<double> leaf_sum_;        // leaves^2
   std::vector<float> inv_leaf_sum_;     // leaves^2 (0 for an empty leaf)
 };

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The importance table with the lat-long map's own texels as its fine level (FineTexels::Map): its
 // density is the map's (environment sampling), exact for the product sampler (chi-square per map
-// texel, sample / pdf / invert agree), bounded light-sample weights, clean errors.
+// texel, sample / pdf / invert agree, the samples' texture coordinates are the map's look-ups),
+// bounded light-sample weights, clean errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -205,6 +206,17 @@ TEST(MapTexels, SamplePdfAndInvertAgree) {
         ASSERT_NEAR(s.pdf / sampler.pdf(s.direction), 1.0f, 1e-4f) << c.name << " " << what << " u " << u.x << " " << u.y;
         const Vec3 d = sampler.sample(sampler.invert(s.direction)).direction;
         EXPECT_GT(dot(d, s.direction), 0.99999f) << c.name << " " << what << " u " << u.x << " " << u.y;
+        // The sample's texture coordinate is where the map reads its direction, so the renderer's
+        // radiance and pdf from it are eval's and pdf's exactly.
+        const Point2 tex = c.map.texture_coord(s.direction);
+        ASSERT_EQ(s.texture.x, tex.x) << c.name << " " << what;
+        ASSERT_EQ(s.texture.y, tex.y) << c.name << " " << what;
+        const Rgb a = c.map.eval_texture(s.texture), b = c.map.eval(s.direction);
+        ASSERT_TRUE(a.r == b.r && a.g == b.g && a.b == b.b) << c.name << " " << what;
+        ASSERT_EQ(sampler.pdf(s.direction, tex), sampler.pdf(s.direction)) << c.name << " " << what;
+        // Any direction, not normalized: the pdf given its texture coordinate is its pdf.
+        const Vec3 r{U(rng) - 0.5f, U(rng) - 0.5f, U(rng) - 0.5f};
+        ASSERT_EQ(sampler.pdf(r * 3.0f, c.map.texture_coord(r * 3.0f)), sampler.pdf(r * 3.0f)) << c.name << " " << what;
       }
     };
     check(t, "environment");

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -60,6 +61,10 @@ struct DirectionSample {
   Vec3 direction;
   float pdf = 0;
   int cell = -1;  ///< top-level cell the sample came from (row-major, y * T + x), -1 if none
+  /// Where `direction` reads the environment map the sampler's table was built from
+  /// (EnvironmentMap::texture_coord), when sampling computed it anyway (tables on the map's own
+  /// texels do); NaN otherwise. eval_texture(texture) is then eval(direction), without a second look-up.
+  Point2 texture{std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()};
 };
 
 /// A row-major 3x3 rotation (world = m * local).

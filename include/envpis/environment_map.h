@@ -100,7 +100,14 @@ class EnvironmentMap {
                                     const EnvironmentMapOptions& options = {});
 
   /// Radiance arriving from world direction `d` (need not be normalized). Zero for an invalid d.
+  /// The same as eval_texture(texture_coord(d)).
   Rgb eval(Vec3 d) const;
+
+  /// Where world direction `d` (need not be normalized) reads the image: lat-long (u, v) or equal-area
+  /// (x, y) texture coordinates. NaN for an invalid d. A renderer that needs both the radiance and an
+  /// ImportanceTable's pdf of one direction computes this once and hands it to both (eval_texture and
+  /// ImportanceTable::pdf(d, texture)).
+  Point2 texture_coord(Vec3 d) const;
 
   /// Radiance at map-local texture coordinates (lat-long u,v or equal-area square x,y), read with
   /// filter().

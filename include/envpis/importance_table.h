@@ -148,6 +148,12 @@ class ImportanceTable {
   DirectionSample sample(Point2 u) const { return sample(top_, u); }
   /// Density (solid angle) of sample() at direction d. 0 for an invalid d or an empty table.
   float pdf(Vec3 d) const { return pdf(top_, d); }
+  /// pdf(d), given `texture` = EnvironmentMap::texture_coord(d) of the map the table was built from: a
+  /// table on the map's own texels (FineTexels::Map) reads d's texel from it instead of looking d up
+  /// again; NaN: looked up from d. Other tables ignore it. A renderer that also needs the radiance of
+  /// d computes the coordinate once (eval_texture(texture) is eval(d)). sample() returns the
+  /// coordinate of its direction in DirectionSample::texture when it computed it.
+  float pdf(Vec3 d, Point2 texture) const { return pdf(top_, d, texture); }
   /// The u that sample() maps to direction d (up to round-off), e.g. to test stratification.
   Point2 invert(Vec3 d) const { return invert(top_, d); }
 
@@ -159,6 +165,8 @@ class ImportanceTable {
   /// table gives pdf 0.
   DirectionSample sample(const DiscreteDistribution2D& top, Point2 u, const SubcellLevel* sub = nullptr) const;
   float pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
+  /// The same with d's texture coordinate (see pdf(d, texture)).
+  float pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 texture, const SubcellLevel* sub = nullptr) const;
   Point2 invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
   /// The environment's own top level: cell (x, y) has probability E[c], c = y * T + x.
   const DiscreteDistribution2D& top_level() const { return top_; }

@@ -132,6 +132,8 @@ class ProductSampler : private SubcellLevel {
   DirectionSample sample(Point2 u) const;
   /// Density (solid angle) of sample() at direction wi.
   float pdf(Vec3 wi) const;
+  /// pdf(wi), given wi's texture coordinate in the table's map (ImportanceTable::pdf(d, texture)).
+  float pdf(Vec3 wi, Point2 texture) const;
   /// The u that sample() maps to direction wi (up to round-off).
   Point2 invert(Vec3 wi) const;
 
