@@ -9,25 +9,18 @@
 #include <cmath>
 #include <limits>
 
+#include "render/analyzer_integrand.h"
 #include "render/camera.h"
 #include "render/hash.h"
 #include "render/integrator.h"
 
 namespace envpis::render {
 
+using namespace analyzer_detail;
+
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kMaxDistributions = 4;  // environment table, compensated table, product, oracle
-
-/// The integrand and every density at one quadrature direction.
-struct DirectionValues {
-  Rgb f;                // BSDF * |cos| * radiance * visibility
-  float f_blind = 0;    // channel average of f without visibility: what the limits sample
-  float p_bsdf = 0;
-  std::array<float, kMaxDistributions> p_light{};
-};
-
 /// Per strategy: integral of w_l^2 f^2 / p_l, w_b^2 f^2 / p_b, w_l f and w_b f, per channel.
 struct StrategySums {
   std::array<double, 3> a_light{}, a_bsdf{}, b_light{}, b_bsdf{};
@@ -92,73 +85,6 @@ std::vector<ShadingPointRef> first_hit_points(const Scene& scene, int per_object
 }
 
 namespace {
-
-/// Everything about one shading point that the quadrature evaluates.
-class PointEvaluator {
- public:
-  PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
-                 const std::vector<StrategyTables>& tables, std::uint64_t jitter)
-      : scene_(scene),
-        env_(scene.environment()),
-        hit_(hit),
-        mat_(scene.material(hit.material)),
-        hm_(resolve_material(scene, &hit_, &scratch_)),
-        sn_(shading_normals(hit_, mat_.transmissive, wo)),
-        frame_(sn_.ns),
-        wo_l_(frame_.to_local(wo)),
-        visibility_(visibility) {
-    ShadingContext sc;
-    sc.n = sn_.ns;
-    sc.wo = wo;
-    sc.wo_local = wo_l_;
-    sc.frame = &frame_;
-    sc.bsdf = hm_.bsdf;
-    sc.cos_bent = hm_.cos_bent;
-    sc.jitter = jitter;
-    sc.opaque = !mat_.transmissive;
-    samplers_.reserve(tables.size());
-    for (const StrategyTables& t : tables) {
-      samplers_.emplace_back(t);
-      samplers_.back().prepare(sc);
-    }
-  }
-
-  /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
-  PointEvaluator(const PointEvaluator&) = delete;
-  PointEvaluator& operator=(const PointEvaluator&) = delete;
-
-  bool eval(Point2 p, DirectionValues* out) const { return eval(equal_area_square_to_sphere(p), out); }
-  /// The same at direction d (the caller mapped p to d).
-  bool eval(Vec3 d, DirectionValues* out) const {
-    const Vec3 wl = frame_.to_local(d);
-    if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
-    // The inside of a closed surface never sees the environment (Material::set_closed_surface).
-    if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
-    const Rgb fb = hm_.bsdf->eval(wo_l_, wl) * std::fabs(wl.z);
-    if (is_black(fb)) return false;
-    const Rgb f = fb * env_.eval(d);
-    if (is_black(f) || !is_finite(f)) return false;
-    out->f = f;
-    out->f_blind = f.average();
-    if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
-    out->p_bsdf = hm_.bsdf->pdf(wo_l_, wl);
-    for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = samplers_[k].pdf(d);
-    return true;
-  }
-
- private:
-  const Scene& scene_;
-  const EnvironmentMap& env_;
-  SurfaceHit hit_;  // its shading normal bent by a normal map, if any
-  const SceneMaterial& mat_;
-  Material scratch_;  // a textured material's lobes at this hit
-  HitMaterial hm_;    // points into scratch_: the evaluator is neither copied nor moved
-  ShadingNormals sn_;
-  Frame frame_;
-  Vec3 wo_l_;
-  bool visibility_;
-  std::vector<LightSampler> samplers_;
-};
 
 /// The cells [c0, c1] of a grid of t cells per side that the interval [lo, lo + size) meets (size at
 /// most one cell), and the share f0 of the interval that lies in c0.
@@ -373,7 +299,7 @@ std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePo
 std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint64_t jitter) const {
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit) || hit.material < 0) return std::nullopt;
-  const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, jitter);
+  const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, *centres_, jitter);
   const int n = grid_resolution();
   const double texel_area = 4.0 * kPi / (double(n) * n);
   Sums s;
@@ -381,28 +307,25 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   for (int t : options_.exact_levels) s.exact.emplace_back(static_cast<std::size_t>(t) * t, std::array<double, 4>{});
   PointAnalysis r;
 
-  // Pass 1: the centre of every fine texel.
+  // Pass 1: the centre of every fine texel (directions, radiance and the point-independent densities
+  // from the per-map TexelCentres). The grid's memory is the thread's, reused from point to point.
   TexelGrid grid;
   grid.n = n;
+  std::vector<std::array<float, 3>>& scratch = grid_scratch_.local();
+  grid.q.swap(scratch);
   grid.q.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
   DirectionValues v;
-  std::vector<float> u(static_cast<std::size_t>(n)), vy(static_cast<std::size_t>(n)), dx(u.size()), dy(u.size()),
-      dz(u.size());
-  for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = (float(x) + 0.5f) / float(n);
-  for (int y = 0; y < n; ++y) {
-    std::fill(vy.begin(), vy.end(), (float(y) + 0.5f) / float(n));
-    equal_area_square_to_sphere(u.size(), u.data(), vy.data(), dx.data(), dy.data(), dz.data());
+  for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * n + x;
+      if (!point.eval_centre(i, &v)) continue;
       const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
-      const std::size_t i = static_cast<std::size_t>(x);
-      if (!point.eval(Vec3{dx[i], dy[i], dz[i]}, &v)) continue;
       ++r.evaluations;
       accumulate(v, q, options_, distribution_, s);
       const float fa = v.f.average();
-      grid.q[static_cast<std::size_t>(y) * n + x] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
-                                                     v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+      grid.q[i] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                   v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
     }
-  }
 
   // Pass 2: the texels whose midpoint is not good enough, on a refine x refine grid each, and again
   // refine times finer while that changes the texel's watched integrals by more than
@@ -435,6 +358,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
       }
     }
   }
+  grid.q.swap(scratch);
   if (!finish(s, options_, distribution_, cell_mass_, &r)) return std::nullopt;
   return r;
 }
@@ -483,6 +407,7 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
     if (t > n)
       throw Error("analyzer: exact level " + std::to_string(t) + " is finer than the table's fine grid (" +
                   std::to_string(n) + ")");
+  centres_ = std::make_unique<TexelCentres>(env, n, tables_);
   build_cell_masses();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -496,14 +421,8 @@ int Analyzer::grid_resolution() const { return tables_.front().table->fine_resol
 void Analyzer::build_cell_masses() {
   const ImportanceTable& table = *tables_.front().table;
   const int n = table.fine_resolution();
-  std::vector<double> texel_mass(static_cast<std::size_t>(n) * n);
   const double area = 4.0 * kPi / (double(n) * n);
-  tbb::parallel_for(0, n, [&](int y) {
-    for (int x = 0; x < n; ++x) {
-      const Vec3 d = equal_area_square_to_sphere({(float(x) + 0.5f) / float(n), (float(y) + 0.5f) / float(n)});
-      texel_mass[static_cast<std::size_t>(y) * n + x] = double(table.pdf(d)) * area;
-    }
-  });
+  const std::vector<float>& texel_pdf = centres_->pdf[0];  // the table's density at each texel's centre
   cell_mass_.clear();
   for (int t : options_.exact_levels) {
     std::vector<double> mass(static_cast<std::size_t>(t) * t, 0.0);
@@ -511,7 +430,7 @@ void Analyzer::build_cell_masses() {
       const Split sy = split(double(y) / n, 1.0 / n, t);
       for (int x = 0; x < n; ++x) {
         const Split sx = split(double(x) / n, 1.0 / n, t);
-        const double m = texel_mass[static_cast<std::size_t>(y) * n + x];
+        const double m = double(texel_pdf[static_cast<std::size_t>(y) * n + x]) * area;
         for (int cy = sy.c0; cy <= sy.c1; ++cy)
           for (int cx = sx.c0; cx <= sx.c1; ++cx)
             mass[static_cast<std::size_t>(cy) * t + cx] +=

@@ -40,8 +40,12 @@
 // direction is traced.
 #pragma once
 
+#include <tbb/enumerable_thread_specific.h>
+
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +54,10 @@
 #include "render/strategy.h"
 
 namespace envpis::render {
+
+namespace analyzer_detail {
+struct TexelCentres;
+}
 
 struct AnalyzerOptions {
   std::vector<Strategy> strategies = all_strategies();
@@ -120,6 +128,9 @@ class Analyzer {
   std::vector<StrategyTables> tables_;  // one per distinct light distribution; [0]: the environment table
   std::vector<int> distribution_;       // per strategy: index into tables_ (-1: no light sample)
   std::vector<std::vector<double>> cell_mass_;  // per exact level, per cell: integral of p_env
+  std::unique_ptr<const analyzer_detail::TexelCentres> centres_;  // what every point's first pass shares
+  // Per thread: the first pass's grid of watched values (analyze()), kept from point to point.
+  mutable tbb::enumerable_thread_specific<std::vector<std::array<float, 3>>> grid_scratch_;
   double build_seconds_ = 0;
 };
 

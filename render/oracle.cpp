@@ -89,6 +89,9 @@ OracleSampler::Point OracleSampler::evaluate(const ShadingContext& sc, Point2 sq
   return p;
 }
 
+// Draws k x k points in cell c and only prefetches their radiance: the draws of many cells are
+// evaluated together (evaluate_draws), so that their cache misses overlap (each cell's distribution
+// and the texels' radiance are spread over tens of MB; the misses were most of prepare's time).
 void OracleSampler::light_points(const ShadingContext& sc, int c, int k, int pass) {
   const DiscreteDistribution2D& d = cells_->cell(c);
   if (!d.valid()) return;
@@ -96,7 +99,6 @@ void OracleSampler::light_points(const ShadingContext& sc, int c, int k, int pas
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
   const float inv_n = 1.0f / float(N), inv_k = 1.0f / float(k);
   const float to_solid_angle = t.solid_angle_pdf(1.0f, float(F) * float(F));  // a fine texel: 4 pi / N^2 sr
-  const bool skip_below = sc.opaque || sc.bsdf->closed_surface();
   const int x0 = (c % T) * F, y0 = (c / T) * F;
   // Every cell and pass its own random offset of the k x k strata.
   const Point2 o = offset(sc.jitter, std::uint64_t(c) * 2 + std::uint64_t(pass) + 1);
@@ -104,10 +106,17 @@ void OracleSampler::light_points(const ShadingContext& sc, int c, int k, int pas
     for (int i = 0; i < k; ++i) {
       const DiscreteDistribution2D::Sample s = d.sample({(float(i) + o.x) * inv_k, (float(j) + o.y) * inv_k});
       const Point2 p{(float(x0 + s.x) + s.offset.x) * inv_n, (float(y0 + s.y) + s.offset.y) * inv_n};
-      points_.push_back(evaluate(sc, p, c, s.pmf * to_solid_angle,
-                                 cells_->radiance(c, s.x, s.y), skip_below));
+      const Rgb* radiance = &cells_->radiance(c, s.x, s.y);
+      __builtin_prefetch(radiance);
+      draws_.push_back({c, p, s.pmf * to_solid_angle, radiance});
     }
   count_[static_cast<std::size_t>(c)] += k * k;
+}
+
+void OracleSampler::evaluate_draws(const ShadingContext& sc) {
+  const bool skip_below = sc.opaque || sc.bsdf->closed_surface();
+  for (const Draw& d : draws_) points_.push_back(evaluate(sc, d.p, d.cell, d.q, *d.radiance, skip_below));
+  draws_.clear();
 }
 
 // The balance heuristic over every point of the cell: the cell's points from its fine distribution
@@ -156,6 +165,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
     active_.push_back(c);
   }
   points_.clear();
+  draws_.clear();
   std::fill(count_.begin(), count_.end(), 0);
   const Point2 first = offset(sc.jitter, 0), second = offset(sc.jitter, ~std::uint64_t(0));
 
@@ -180,6 +190,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
   const int k0 = static_cast<int>(std::lround(std::sqrt(double(options_.directions))));
   for (std::size_t a = 0; a < active_.size(); ++a)
     light_points(sc, active_[a], horizon_[a] ? std::max(k0, kHorizonSide) : k0, 0);
+  evaluate_draws(sc);
   estimate();
   double total = 0;
   for (int c : active_) total += cell_sum_[static_cast<std::size_t>(c)];
@@ -189,6 +200,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
       const int k = std::min(kMaxRefineSide, static_cast<int>(std::sqrt(options_.refine_points * share)));
       if (k > 0) light_points(sc, c, k, 1);
     }
+    evaluate_draws(sc);
     estimate();
     total = 0;
     for (int c : active_) total += cell_sum_[static_cast<std::size_t>(c)];

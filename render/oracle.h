@@ -60,7 +60,7 @@ class OracleCells {
   const ImportanceTable& table() const { return *table_; }
   /// Mean radiance over texel (x, y) of cell c (0 <= x, y < F): what a light sample of that texel
   /// sees on average (the texel's importance may be raised above it near a small bright source).
-  Rgb radiance(int c, int x, int y) const { return radiance_[index(c, x, y)]; }
+  const Rgb& radiance(int c, int x, int y) const { return radiance_[index(c, x, y)]; }
   /// Cell c's fine distribution over its F x F texels (invalid when the cell has no importance).
   const DiscreteDistribution2D& cell(int c) const { return cells_[static_cast<std::size_t>(c)]; }
 
@@ -93,7 +93,14 @@ class OracleSampler {
     float q;   // solid-angle density of the cell's fine distribution
     float pb;  // the material's BSDF sampling density
   };
-  void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k points in cell c
+  struct Draw {  // a point drawn from a cell's distribution, not yet evaluated
+    int cell;
+    Point2 p;
+    float q;
+    const Rgb* radiance;
+  };
+  void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k draws in cell c
+  void evaluate_draws(const ShadingContext& sc);  // every draw into points_
   Point evaluate(const ShadingContext& sc, Point2 p, int c, float q, Rgb radiance, bool skip_below) const;
   void estimate();  // cell_sum_ from points_ and count_
   void texel_weights(int c, float* out) const;  // cell c's F x F texel weights
@@ -103,6 +110,7 @@ class OracleSampler {
   OracleOptions options_;
   DiscreteDistribution2D top_;
   std::vector<Point> points_;     // every evaluated direction of this shading point
+  std::vector<Draw> draws_;       // drawn, to be evaluated
   std::vector<int> count_;        // per cell: points drawn from its fine distribution
   std::vector<int> active_;       // cells a light sample can use
   std::vector<bool> horizon_;     // per active cell: it straddles the horizon of a surface seen from above only

@@ -34,6 +34,28 @@ double variance_of_mean(double sum, double sum2, double n) {
 /// Radiance near the 1e30 clamp has a variance beyond float range: saturate it rather than drop a
 /// finite pixel.
 float saturate_float(double v) { return static_cast<float>(std::min(v, double(std::numeric_limits<float>::max()))); }
+
+/// A pixel's running sums over its samples so far.
+struct PixelSums {
+  double sum[3] = {0, 0, 0};
+  double sum_avg = 0, sum_avg2 = 0, sum_light = 0, sum_light2 = 0;
+
+  /// Writes the estimate of n samples (rgb: 3 floats); false when it is not finite (everything 0 then).
+  bool write(double n, float* rgb, float* variance, float* light_variance) const {
+    bool finite = true;
+    for (int c = 0; c < 3; ++c) {
+      rgb[c] = static_cast<float>(sum[c] / n);
+      finite = finite && std::isfinite(rgb[c]);
+    }
+    const double var = variance_of_mean(sum_avg, sum_avg2, n);
+    *variance = saturate_float(var);
+    *light_variance = saturate_float(variance_of_mean(sum_light, sum_light2, n));
+    if (finite && std::isfinite(var)) return true;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    *variance = *light_variance = 0.0f;
+    return false;
+  }
+};
 }  // namespace
 
 void validate(const RenderOptions& o) {
@@ -48,6 +70,9 @@ void validate(const RenderOptions& o) {
   if (o.max_depth > 1024) throw Error("max depth must be at most 1024");
   if (o.rr_depth < 1) throw Error("Russian roulette depth must be at least 1");
   if (o.tile_size < 1 || o.tile_size > 1024) throw Error("tile size must be in 1..1024");
+  for (std::size_t i = 0; i < o.prefix_spp.size(); ++i)
+    if (o.prefix_spp[i] < 1 || o.prefix_spp[i] >= o.spp || (i > 0 && o.prefix_spp[i] <= o.prefix_spp[i - 1]))
+      throw Error("prefix spp must increase and lie in 1.." + std::to_string(o.spp - 1));
   validate(o.regularization);
   const ImportanceTableOptions& lt = o.light_table;
   envpis::validate(lt);
@@ -87,6 +112,13 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   r.variance.assign(npix, 0.0f);
   r.light_variance.assign(npix, 0.0f);
   r.object_id.assign(npix, -1);
+  for (int n : options.prefix_spp) {  // validate(): increasing, each in 1..spp - 1
+    PrefixImage& im = r.prefixes.emplace_back();
+    im.spp = n;
+    im.rgb.assign(npix * 3, 0.0f);
+    im.variance.assign(npix, 0.0f);
+    im.light_variance.assign(npix, 0.0f);
+  }
   r.samples = static_cast<std::uint64_t>(npix) * static_cast<std::uint64_t>(options.spp);
 
   std::optional<StrategyTables> own;
@@ -142,8 +174,9 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x) {
                 const std::size_t pix = static_cast<std::size_t>(y) * W + x;
-                double sum[3] = {0, 0, 0};
-                double sum_avg = 0, sum_avg2 = 0, sum_light = 0, sum_light2 = 0;
+                PixelSums ps;
+                auto& [sum, sum_avg, sum_avg2, sum_light, sum_light2] = ps;
+                std::size_t next_prefix = 0;
                 for (int s = 0; s < options.spp; ++s) {
                   PixelSampler rng(options.sampler, options.seed, pix, static_cast<std::uint64_t>(s));
                   const Point2 jitter = rng.next2d();
@@ -160,22 +193,13 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                   const double l = (double(light_part.r) + light_part.g + light_part.b) / 3.0;
                   sum_light += l;
                   sum_light2 += l * l;
+                  if (next_prefix < r.prefixes.size() && r.prefixes[next_prefix].spp == s + 1) {
+                    PrefixImage& im = r.prefixes[next_prefix++];
+                    ps.write(s + 1, &im.rgb[pix * 3], &im.variance[pix], &im.light_variance[pix]);
+                  }
                 }
-                const double n = options.spp;
-                float* out = &r.rgb[pix * 3];
-                bool finite = true;
-                for (int c = 0; c < 3; ++c) {
-                  out[c] = static_cast<float>(sum[c] / n);
-                  finite = finite && std::isfinite(out[c]);
-                }
-                const double var = variance_of_mean(sum_avg, sum_avg2, n);
-                r.variance[pix] = saturate_float(var);
-                r.light_variance[pix] = saturate_float(variance_of_mean(sum_light, sum_light2, n));
-                if (!finite || !std::isfinite(var)) {
-                  out[0] = out[1] = out[2] = 0.0f;
-                  r.variance[pix] = r.light_variance[pix] = 0.0f;
+                if (!ps.write(options.spp, &r.rgb[pix * 3], &r.variance[pix], &r.light_variance[pix]))
                   nonfinite.fetch_add(1, std::memory_order_relaxed);
-                }
                 SurfaceHit hit;
                 const Ray centre = camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
                 r.object_id[pix] = scene.intersect(centre, &hit) ? hit.object : -1;

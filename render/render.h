@@ -66,6 +66,16 @@ struct RenderOptions {
   const FireflyLogOptions* firefly_log = nullptr;
   /// Called with the fraction of tiles done (0..1), from worker threads but never concurrently.
   std::function<void(double)> progress;
+  /// Sample counts, each in 1..spp - 1, at which each pixel's running estimate is also kept
+  /// (RenderResult::prefixes): the image this render would give at that spp, bit for bit, since a
+  /// pixel's samples do not depend on spp and are summed in order. Not timed.
+  std::vector<int> prefix_spp;
+};
+
+/// The image of the first `spp` samples of each pixel (RenderOptions::prefix_spp).
+struct PrefixImage {
+  int spp = 0;
+  std::vector<float> rgb, variance, light_variance;  ///< as RenderResult's
 };
 
 struct RenderResult {
@@ -90,6 +100,7 @@ struct RenderResult {
   /// and how many more there were beyond FireflyLogOptions::max_records.
   std::vector<FireflyRecord> fireflies;
   std::size_t fireflies_dropped = 0;
+  std::vector<PrefixImage> prefixes;  ///< per RenderOptions::prefix_spp, in its order
 
   Rgb pixel(int x, int y) const {
     const float* p = &rgb[(static_cast<std::size_t>(y) * width + x) * 3];

@@ -49,9 +49,11 @@ const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
 }
 
 render::RenderResult CompareSession::render(render::Strategy s, int spp, std::uint64_t seed, const std::string& label,
-                                            const render::FireflyLogOptions* log) {
+                                            const render::FireflyLogOptions* log,
+                                            const std::vector<int>& prefix_spp) {
   render::RenderOptions o = base;
   o.firefly_log = log;
+  o.prefix_spp = prefix_spp;
   o.strategy = s;
   o.spp = spp;
   o.seed = seed;

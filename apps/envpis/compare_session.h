@@ -35,9 +35,11 @@ class CompareSession {
   const render::StrategyTables& tables_for(render::Strategy s);
   const std::map<render::Strategy, render::StrategyTables>& tables() const { return tables_; }
   /// Renders `spp` samples per pixel of `s` with `seed`; `label` names it on the progress bar a render
-  /// of over 2 s shows on a terminal (none for an empty label); `log` collects its fireflies.
+  /// of over 2 s shows on a terminal (none for an empty label); `log` collects its fireflies;
+  /// `prefix_spp`: the images of fewer samples to keep as well (RenderOptions::prefix_spp).
   render::RenderResult render(render::Strategy s, int spp, std::uint64_t seed, const std::string& label,
-                              const render::FireflyLogOptions* log = nullptr);
+                              const render::FireflyLogOptions* log = nullptr,
+                              const std::vector<int>& prefix_spp = {});
 
  private:
   std::map<render::Strategy, render::StrategyTables> tables_;

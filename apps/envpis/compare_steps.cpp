@@ -137,9 +137,15 @@ void measure_equal_spp(CompareSession& session, Comparison& c) {
   std::optional<FireflyLogOptions> log;
   if (!s.firefly_log.empty()) log = relative_firefly_log(c.reference, s.spp, s.firefly_factor);
   MeasuredSet& set = c.equal_spp;
+  // The convergence series' images are prefixes of these renders (render/render.h: bit-identical to
+  // rendering them apart), so the series costs no render of its own.
+  std::vector<int> prefixes;
+  if (!session.args.no_convergence)
+    for (int n = 1; n < s.spp; n *= 2) prefixes.push_back(n);
   for (Strategy st : s.strategies) {
     session.tables_for(st);  // built before the render: its time is not the sampling's
-    RenderResult r = session.render(st, s.spp, s.seed, std::string("equal spp: ") + to_string(st), log ? &*log : nullptr);
+    RenderResult r = session.render(st, s.spp, s.seed, std::string("equal spp: ") + to_string(st), log ? &*log : nullptr,
+                                    prefixes);
     if (log) write_fireflies(session, st, r);
     Measured m = measured_of(r, st, s.spp, std::string("spp-") + to_string(st));
     if (c.regions.empty()) {
@@ -173,15 +179,23 @@ void measure_overhead(CompareSession& session, Comparison& c) {
 
 void measure_convergence(CompareSession& session, Comparison& c) {
   const int spp = session.settings.spp;
-  std::vector<int> points;
-  for (int n = 1; n < spp; n *= 2) points.push_back(n);
-  for (const Measured& e : c.equal_spp.measured) {
+  for (std::size_t i = 0; i < c.equal_spp.measured.size(); ++i) {
+    const Measured& e = c.equal_spp.measured[i];
+    const RenderResult& full = c.equal_spp.images[i];
     json series = json::array();
-    for (int n : points) {
-      const RenderResult r = session.render(e.strategy, n, session.settings.seed,
-                                            std::string("convergence: ") + to_string(e.strategy) + " @ " + std::to_string(n));
+    for (const PrefixImage& p : full.prefixes) {
+      // The equal-spp render's first p.spp samples per pixel: the same image as a render at p.spp
+      // spp with the same seed. It has no time of its own ("seconds": null).
+      RenderResult r;
+      r.width = full.width;
+      r.height = full.height;
+      r.spp = p.spp;
+      r.rgb = p.rgb;
+      r.variance = p.variance;
+      r.light_variance = p.light_variance;
+      r.object_id = full.object_id;
       const ImageMetrics mm = measure_image(r, c.reference, c.regions);
-      series.push_back({{"spp", n}, {"seconds", r.seconds}, {"relmse", mm.image.relmse},
+      series.push_back({{"spp", p.spp}, {"seconds", nullptr}, {"relmse", mm.image.relmse},
                         {"regions", regions_json(c.regions, mm, false)}});
     }
     series.push_back({{"spp", spp},
@@ -189,7 +203,8 @@ void measure_convergence(CompareSession& session, Comparison& c) {
                       {"relmse", e.metrics.image.relmse},
                       {"regions", regions_json(c.regions, e.metrics, false)}});
     c.convergence[to_string(e.strategy)] = series;
-    session.progress.line("convergence: %-8s %zu points", to_string(e.strategy), points.size() + 1);
+    session.progress.line("convergence: %-8s %zu points (prefixes of the equal-spp render)", to_string(e.strategy),
+                          full.prefixes.size() + 1);
   }
 }
 

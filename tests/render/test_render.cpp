@@ -3,7 +3,7 @@
 //   - every strategy converges to the same per-sphere means on a small fig1 as a high-sample reference
 //     rendered with a different strategy (z-test, Bonferroni-corrected),
 //   - no NaN/Inf pixel with either integrator,
-//   - identical images for the same seed at 1 and 2 threads,
+//   - identical images for the same seed at 1 and 2 threads, and prefix images (fewer spp) bit-identical to those renders,
 //   - white furnace (white Lambert and non-absorbing dielectric spheres under a constant white sky),
 //   - light samplers: sample() and pdf() agree, and the oracle / product densities integrate to 1,
 //   - the command's option validation (scene files: test_scene_file.cpp).
@@ -159,6 +159,30 @@ TEST(Determinism, SameSeedSameImageAtOneAndTwoThreads) {
   }
 }
 
+
+// The prefix images (compare's convergence series) are the images of renders at fewer spp, bit for bit.
+TEST(Determinism, PrefixImagesAreTheRendersAtFewerSamples) {
+  RenderOptions o = small_options(Strategy::Product, 8, 5);
+  o.integrator = IntegratorKind::Path;
+  o.prefix_spp = {1, 3};
+  const RenderResult full = render(small_fig1(), o);
+  ASSERT_EQ(full.prefixes.size(), 2u);
+  o.prefix_spp.clear();
+  EXPECT_EQ(render(small_fig1(), o).rgb, full.rgb);
+  for (const PrefixImage& p : full.prefixes) {
+    o.spp = p.spp;
+    const RenderResult r = render(small_fig1(), o);
+    EXPECT_EQ(r.rgb, p.rgb) << p.spp;
+    EXPECT_EQ(r.variance, p.variance) << p.spp;
+    EXPECT_EQ(r.light_variance, p.light_variance) << p.spp;
+    EXPECT_NE(r.rgb, full.rgb) << p.spp;
+  }
+  for (const std::vector<int>& bad : {std::vector<int>{0}, {8}, {2, 2}, {3, 1}}) {
+    o.spp = 8;
+    o.prefix_spp = bad;
+    EXPECT_THROW(render(small_fig1(), o), Error);
+  }
+}
 // White furnace: under a constant unit environment, a white Lambert sphere and a non-absorbing
 // (nearly smooth) dielectric sphere are invisible (radiance 1 everywhere) with the path integrator.
 TEST(Furnace, WhiteLambertAndClearDielectricSpheresAreInvisible) {

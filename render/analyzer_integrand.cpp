@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "render/analyzer_integrand.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace envpis::render::analyzer_detail {
+
+bool point_independent(Strategy s) { return s == Strategy::Env || s == Strategy::Mis || s == Strategy::MisComp; }
+
+TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<StrategyTables>& tables) : n(n_) {
+  const std::size_t count = static_cast<std::size_t>(n) * n;
+  direction.resize(count);
+  radiance.resize(count);
+  for (std::size_t k = 0; k < tables.size() && k < pdf.size(); ++k)
+    if (point_independent(tables[k].strategy)) pdf[k].resize(count);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<LightSampler> samplers;  // no prepare(): their densities do not depend on the point
+    for (std::size_t k = 0; k < tables.size() && k < pdf.size(); ++k)
+      if (!pdf[k].empty()) samplers.emplace_back(tables[k]);
+    const std::size_t un = static_cast<std::size_t>(n);
+    std::vector<float> u(un), v(un), dx(un), dy(un), dz(un);
+    for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = (float(x) + 0.5f) / float(n);
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      std::fill(v.begin(), v.end(), (float(y) + 0.5f) / float(n));
+      equal_area_square_to_sphere(un, u.data(), v.data(), dx.data(), dy.data(), dz.data());
+      for (std::size_t x = 0; x < un; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * un + x;
+        const Vec3 d{dx[x], dy[x], dz[x]};
+        direction[i] = d;
+        radiance[i] = env.eval(d);
+        std::size_t s = 0;
+        for (auto& p : pdf)
+          if (!p.empty()) p[i] = samplers[s++].pdf(d);
+      }
+    }
+  });
+}
+
+PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
+                               const std::vector<StrategyTables>& tables, const TexelCentres& centres,
+                               std::uint64_t jitter)
+    : scene_(scene),
+      env_(scene.environment()),
+      centres_(centres),
+      hit_(hit),
+      mat_(scene.material(hit.material)),
+      hm_(resolve_material(scene, &hit_, &scratch_)),
+      sn_(shading_normals(hit_, mat_.transmissive, wo)),
+      frame_(sn_.ns),
+      wo_l_(frame_.to_local(wo)),
+      visibility_(visibility) {
+  ShadingContext sc;
+  sc.n = sn_.ns;
+  sc.wo = wo;
+  sc.wo_local = wo_l_;
+  sc.frame = &frame_;
+  sc.bsdf = hm_.bsdf;
+  sc.cos_bent = hm_.cos_bent;
+  sc.jitter = jitter;
+  sc.opaque = !mat_.transmissive;
+  samplers_.reserve(tables.size());
+  for (std::size_t k = 0; k < tables.size(); ++k) {
+    samplers_.emplace_back(tables[k]);
+    if (k < fixed_.size() && !centres_.pdf[k].empty()) fixed_[k] = true;  // no prepare() needed
+    else samplers_.back().prepare(sc);
+  }
+}
+
+// The direction's values; the radiance and the point-independent densities come from the callables
+// (the map and the samplers at an arbitrary point, the per-map arrays at a texel centre).
+template <class Radiance, class FixedPdf>
+bool PointEvaluator::eval(Vec3 d, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const {
+  const Vec3 wl = frame_.to_local(d);
+  if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
+  // The inside of a closed surface never sees the environment (Material::set_closed_surface).
+  if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
+  const Rgb fb = hm_.bsdf->eval(wo_l_, wl) * std::fabs(wl.z);
+  if (is_black(fb)) return false;
+  const Rgb f = fb * radiance();
+  if (is_black(f) || !is_finite(f)) return false;
+  out->f = f;
+  out->f_blind = f.average();
+  if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
+  out->p_bsdf = hm_.bsdf->pdf(wo_l_, wl);
+  for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf(d);
+  return true;
+}
+
+bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
+  const Vec3 d = equal_area_square_to_sphere(p);
+  return eval(d, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf(d); }, out);
+}
+
+bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out) const {
+  return eval(centres_.direction[i], [&] { return centres_.radiance[i]; },
+              [&](std::size_t k) { return centres_.pdf[k][i]; }, out);
+}
+
+}  // namespace envpis::render::analyzer_detail
