@@ -150,15 +150,18 @@ void MapTexelLevel::compute_importance(const MapTexelOptions& options) {
     return;
   }
   const float mean = static_cast<float>(sum / (4.0 * kPi));
-  const auto range = per_row(h_, [&](int y) {
-    const float* v = imp_.data() + static_cast<std::size_t>(y) * w_;
-    const auto mm = std::minmax_element(v, v + w_);
-    return std::pair<float, float>(*mm.first, *mm.second);
-  });
-  float lo = range[0].first, hi = range[0].second;
-  for (const auto& r : range) lo = std::min(lo, r.first), hi = std::max(hi, r.second);
   // A constant map's compensated table is the plain one (it would be empty).
-  if (options.compensated && hi - lo > 1e-6f * hi) {
+  const auto varies = [&] {
+    const auto range = per_row(h_, [&](int y) {
+      const float* v = imp_.data() + static_cast<std::size_t>(y) * w_;
+      const auto mm = std::minmax_element(v, v + w_);
+      return std::pair<float, float>(*mm.first, *mm.second);
+    });
+    float lo = range[0].first, hi = range[0].second;
+    for (const auto& r : range) lo = std::min(lo, r.first), hi = std::max(hi, r.second);
+    return hi - lo > 1e-6f * hi;
+  };
+  if (options.compensated && varies()) {
     integral_ = map_rows([mean](float v) { return std::max(0.0f, v - mean); });
     return;
   }
