@@ -198,8 +198,10 @@ void BM_ProductPdf(benchmark::State& state) {  // pdf of an arbitrary direction 
 
 // ---- environment-only sampling from the two-level table ----
 
-void BM_EnvSample(benchmark::State& state) {
-  const ImportanceTable& table = sunset_table();
+// A light sample from the table `table` returns.
+template <const ImportanceTable& (*table_of)()>
+void env_sample(benchmark::State& state) {
+  const ImportanceTable& table = table_of();
   const auto& us = uniform_points();
   std::size_t i = 0;
   for (auto _ : state) {
@@ -208,6 +210,8 @@ void BM_EnvSample(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
+
+void BM_EnvSample(benchmark::State& state) { env_sample<sunset_table>(state); }
 
 void BM_EnvPdf(benchmark::State& state) {
   const ImportanceTable& table = sunset_table();
@@ -219,16 +223,7 @@ void BM_EnvPdf(benchmark::State& state) {
 
 // The same on the table of the map's own texels (the renderer's default): a light sample, and the pdf
 // and radiance of a direction (what the renderer asks of a BSDF sample's direction that escapes).
-void BM_EnvSampleMapTexels(benchmark::State& state) {
-  const ImportanceTable& table = sunset_table_map_texels();
-  const auto& us = uniform_points();
-  std::size_t i = 0;
-  for (auto _ : state) {
-    const DirectionSample d = table.sample(us[i++ & kMask]);
-    benchmark::DoNotOptimize(d);
-  }
-  state.SetItemsProcessed(state.iterations());
-}
+void BM_EnvSampleMapTexels(benchmark::State& state) { env_sample<sunset_table_map_texels>(state); }
 
 void BM_EnvPdfAndEvalMapTexels(benchmark::State& state) {
   const ImportanceTable& table = sunset_table_map_texels();
