@@ -25,19 +25,6 @@ Portals room_portals() {
   return Portals({quad({2, 0, 1.5f}, {0, 0.8f, 0}, {0, 0, 0.5f}), quad({0, 0, 3}, {0.5f, 0, 0}, {0, 0.5f, 0})});
 }
 
-ImportanceTableOptions refined_table() {
-  ImportanceTableOptions o;
-  o.subdivision = 4;
-  return o;
-}
-
-ProductSamplerOptions refined_sampler() {
-  ProductSamplerOptions o;
-  o.refine = true;
-  o.cell_estimate = CellEstimate::Moments;
-  return o;
-}
-
 BsdfProxy plastic(float alpha) {
   BsdfProxy b;
   b.add_diffuse(0.5f);

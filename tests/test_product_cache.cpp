@@ -16,19 +16,6 @@ using namespace envpis::test;
 
 namespace {
 
-ImportanceTableOptions refined_table() {
-  ImportanceTableOptions o;
-  o.subdivision = 4;
-  return o;
-}
-
-ProductSamplerOptions refined_sampler() {
-  ProductSamplerOptions o;
-  o.refine = true;
-  o.cell_estimate = CellEstimate::Moments;
-  return o;
-}
-
 struct Point {
   Vec3 n, wo;
   BsdfProxy proxy;

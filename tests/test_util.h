@@ -95,4 +95,19 @@ inline Vec3 random_direction(std::mt19937_64& rng) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
+/// A table with 4 x 4 sub-cells per top cell, and a product sampler that refines into them with the
+/// moments cell estimate: the refined configuration the cache tests share.
+inline ImportanceTableOptions refined_table() {
+  ImportanceTableOptions o;
+  o.subdivision = 4;
+  return o;
+}
+
+inline ProductSamplerOptions refined_sampler() {
+  ProductSamplerOptions o;
+  o.refine = true;
+  o.cell_estimate = CellEstimate::Moments;
+  return o;
+}
+
 }  // namespace envpis::test
