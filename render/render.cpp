@@ -240,6 +240,22 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   return r;
 }
 
+RenderResult RenderResult::prefix(std::size_t i) const {
+  const PrefixImage& p = prefixes.at(i);
+  RenderResult r;
+  r.width = width;
+  r.height = height;
+  r.spp = p.spp;
+  r.strategy = strategy;
+  r.integrator = integrator;
+  r.rgb = p.rgb;
+  r.variance = p.variance;
+  r.light_variance = p.light_variance;
+  r.object_id = object_id;
+  r.samples = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) * static_cast<std::uint64_t>(p.spp);
+  return r;
+}
+
 void write_exr(const std::string& path, const RenderResult& image) {
   auto out = OIIO::ImageOutput::create(path);
   if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());

@@ -102,6 +102,10 @@ struct RenderResult {
   std::size_t fireflies_dropped = 0;
   std::vector<PrefixImage> prefixes;  ///< per RenderOptions::prefix_spp, in its order
 
+  /// prefixes[i] as a render of its own: its image and variances, this render's size and object ids,
+  /// no time, fireflies or prefixes (what a render at prefixes[i].spp with the same seed would give).
+  RenderResult prefix(std::size_t i) const;
+
   Rgb pixel(int x, int y) const {
     const float* p = &rgb[(static_cast<std::size_t>(y) * width + x) * 3];
     return {p[0], p[1], p[2]};

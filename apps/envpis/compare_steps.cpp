@@ -183,19 +183,12 @@ void measure_convergence(CompareSession& session, Comparison& c) {
     const Measured& e = c.equal_spp.measured[i];
     const RenderResult& full = c.equal_spp.images[i];
     json series = json::array();
-    for (const PrefixImage& p : full.prefixes) {
-      // The equal-spp render's first p.spp samples per pixel: the same image as a render at p.spp
-      // spp with the same seed. It has no time of its own ("seconds": null).
-      RenderResult r;
-      r.width = full.width;
-      r.height = full.height;
-      r.spp = p.spp;
-      r.rgb = p.rgb;
-      r.variance = p.variance;
-      r.light_variance = p.light_variance;
-      r.object_id = full.object_id;
+    for (std::size_t k = 0; k < full.prefixes.size(); ++k) {
+      // The equal-spp render's first spp samples per pixel: the same image as a render at that spp
+      // with the same seed. It has no time of its own ("seconds": null).
+      const RenderResult r = full.prefix(k);
       const ImageMetrics mm = measure_image(r, c.reference, c.regions);
-      series.push_back({{"spp", p.spp}, {"seconds", nullptr}, {"relmse", mm.image.relmse},
+      series.push_back({{"spp", r.spp}, {"seconds", nullptr}, {"relmse", mm.image.relmse},
                         {"regions", regions_json(c.regions, mm, false)}});
     }
     series.push_back({{"spp", spp},

@@ -169,12 +169,15 @@ TEST(Determinism, PrefixImagesAreTheRendersAtFewerSamples) {
   ASSERT_EQ(full.prefixes.size(), 2u);
   o.prefix_spp.clear();
   EXPECT_EQ(render(small_fig1(), o).rgb, full.rgb);
-  for (const PrefixImage& p : full.prefixes) {
+  for (std::size_t k = 0; k < full.prefixes.size(); ++k) {
+    const RenderResult p = full.prefix(k);
     o.spp = p.spp;
     const RenderResult r = render(small_fig1(), o);
     EXPECT_EQ(r.rgb, p.rgb) << p.spp;
     EXPECT_EQ(r.variance, p.variance) << p.spp;
     EXPECT_EQ(r.light_variance, p.light_variance) << p.spp;
+    EXPECT_EQ(r.object_id, p.object_id) << p.spp;
+    EXPECT_EQ(r.samples, p.samples) << p.spp;
     EXPECT_NE(r.rgb, full.rgb) << p.spp;
   }
   for (const std::vector<int>& bad : {std::vector<int>{0}, {8}, {2, 2}, {3, 1}}) {
