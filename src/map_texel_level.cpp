@@ -133,17 +133,21 @@ void MapTexelLevel::compute_importance(const MapTexelOptions& options) {
         }
     });
   }
-  // Applies f to every texel of each row and returns the rows' sums of importance x solid angle.
-  const auto map_rows = [&](const auto& f) {
+  // The rows' sums of f(importance) x solid angle; with `write`, every texel is replaced by f of it
+  // (the plain sum reads only: writing 4 bytes per texel back unchanged costs a pass over the array).
+  const auto map_rows = [&](const auto& f, bool write = true) {
     return sum_rows(per_row(h_, [&](int y) {
       double row = 0;
       float* v = imp_.data() + static_cast<std::size_t>(y) * w_;
-      for (int x = 0; x < w_; ++x) row += double(v[x] = f(v[x]));
+      for (int x = 0; x < w_; ++x) {
+        const float t = f(v[x]);
+        if (write) v[x] = t;
+        row += double(t);
+      }
       return row * row_sr_[static_cast<std::size_t>(y)];
     }));
   };
-  const auto identity = [](float v) { return v; };
-  double sum = map_rows(identity);
+  double sum = map_rows([](float v) { return v; }, false);
   if (!(sum > 0) || !std::isfinite(sum)) {
     parallel_fill(imp_.data(), n, 0.0f);
     integral_ = 0;
