@@ -47,9 +47,17 @@ const std::uint32_t* nibble_tables(int dim) {
 SamplerKind parse_sampler(const std::string& s) {
   if (s == "sobol") return SamplerKind::Sobol;
   if (s == "independent") return SamplerKind::Independent;
-  throw Error("unknown sampler '" + s + "' (expected sobol or independent)");
+  if (s == "padded") return SamplerKind::Padded;
+  throw Error("unknown sampler '" + s + "' (expected sobol, padded or independent)");
 }
 
-const char* to_string(SamplerKind k) { return k == SamplerKind::Sobol ? "sobol" : "independent"; }
+const char* to_string(SamplerKind k) {
+  switch (k) {
+    case SamplerKind::Sobol: return "sobol";
+    case SamplerKind::Padded: return "padded";
+    case SamplerKind::Independent: break;
+  }
+  return "independent";
+}
 
 }  // namespace envpis::render

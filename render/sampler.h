@@ -13,6 +13,10 @@
 // pixel are a (t,m,s)-net in all these dimensions at once: the pixel position, the light sample and
 // the BSDF sample are stratified jointly, not only pair by pair. Dimensions from 64 on (deep path
 // vertices) are padded pairs: 2D (0,2)-sequences with their own scramble and shuffle.
+//
+// Padded: only the pixel position comes from the full sequence; every later pair is a padded pair.
+// Each pair is then better stratified on its own, but no longer jointly with the pixel position
+// (docs/sampling.md measures where each wins).
 #pragma once
 
 #include <cstdint>
@@ -24,8 +28,8 @@
 
 namespace envpis::render {
 
-enum class SamplerKind { Independent, Sobol };
-/// "independent" | "sobol"; throws Error otherwise.
+enum class SamplerKind { Independent, Sobol, Padded };
+/// "independent" | "sobol" | "padded"; throws Error otherwise.
 SamplerKind parse_sampler(const std::string& s);
 const char* to_string(SamplerKind k);
 
@@ -41,14 +45,14 @@ class PixelSampler {
   float next1d() {
     const std::uint32_t d = dim_++;
     if (kind_ == SamplerKind::Independent) return independent(d);
-    if (d < sobol::kDimensions) return global(d);
+    if (d < global_dimensions()) return global(d);
     return sobol::sample_1d(index_, scramble(d));
   }
   Point2 next2d() {
     const std::uint32_t d = dim_;
     dim_ += 2;
     if (kind_ == SamplerKind::Independent) return {independent(d), independent(d + 1)};
-    if (d + 1 < sobol::kDimensions) return {global(d), global(d + 1)};
+    if (d + 1 < global_dimensions()) return {global(d), global(d + 1)};
     Point2 p;
     sobol::sample_2d(index_, scramble(d), &p.x, &p.y);
     return p;
@@ -65,6 +69,9 @@ class PixelSampler {
   }
 
  private:
+  /// Dimensions taken from the pixel's point of the full Sobol sequence; the rest are padded pairs.
+  /// Padded: only the pixel position (dimensions 0 and 1).
+  std::uint32_t global_dimensions() const { return kind_ == SamplerKind::Padded ? 2u : std::uint32_t(sobol::kDimensions); }
   /// Uniform in [0, 1) with 24 random bits (never exactly 1).
   float independent(std::uint32_t dim) const {
     const std::uint64_t h = mix64(key_ + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);

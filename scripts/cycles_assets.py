@@ -52,7 +52,7 @@ def parse_args(argv):
                    help="envpis --max-depth (surface vertices); Cycles max bounces = this - 1 (default 8)")
     p.add_argument("--strategies", default="mis,mis-comp,product", help="envpis strategies")
     p.add_argument("--ref-strategy", default="mis", help="envpis reference strategy (default mis)")
-    p.add_argument("--sampler", default="sobol", help="envpis --sampler (default sobol)")
+    p.add_argument("--sampler", default="sobol", help="envpis --sampler: sobol (default), padded (per-pair sequences, as Cycles) or independent")
     p.add_argument("--pattern", default="PROGRESSIVE_MULTI_JITTER", choices=("PROGRESSIVE_MULTI_JITTER", "SOBOL"),
                    help="Cycles sampling pattern (default PROGRESSIVE_MULTI_JITTER)")
     p.add_argument("--threads", type=int, default=2, help="threads of every render (default 2)")

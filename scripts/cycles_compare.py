@@ -84,7 +84,7 @@ def parse_args(argv):
     p.add_argument("--ref-spp", type=int, default=4096, help="samples per pixel of each reference (default 4096; 0: 16 x the largest --spp)")
     p.add_argument("--strategies", default="bsdf,mis,mis-comp,product",
                    help="envpis strategies (default bsdf,mis,mis-comp,product)")
-    p.add_argument("--sampler", default="sobol", help="envpis --sampler (default sobol)")
+    p.add_argument("--sampler", default="sobol", help="envpis --sampler: sobol (default), padded (per-pair sequences, as Cycles) or independent")
     p.add_argument("--ref-strategy", default="mis", help="envpis reference strategy (default mis)")
     p.add_argument("--pattern", default="PROGRESSIVE_MULTI_JITTER", choices=("PROGRESSIVE_MULTI_JITTER", "SOBOL"),
                    help="Cycles sampling pattern (default Cycles' own default, PROGRESSIVE_MULTI_JITTER)")
@@ -127,8 +127,8 @@ def check_envpis_args(a):
     for s in a.strategies + [a.ref_strategy]:
         if s not in STRATEGIES:
             raise Failure("unknown envpis strategy '%s' (%s)" % (s, ", ".join(STRATEGIES)))
-    if a.sampler not in ("sobol", "independent"):
-        raise Failure("--sampler: sobol or independent, got '%s'" % a.sampler)
+    if a.sampler not in ("sobol", "padded", "independent"):
+        raise Failure("--sampler: sobol, padded or independent, got '%s'" % a.sampler)
     if not (os.path.isfile(a.envpis) and os.access(a.envpis, os.X_OK)):
         raise Failure("no envpis binary at '%s' (build it: cmake --build build --target envpis_cmd, or --envpis)"
                       % a.envpis)

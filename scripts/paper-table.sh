@@ -12,7 +12,7 @@
 # 600 us of CPU per sample, docs/analyzer.md "The oracle").
 # Override with SPP, REF_SPP, WIDTH, HEIGHT, ORACLE_RES, MAPS, OUT, BUILD (REBUILD=0: use BUILD as is),
 # STRATEGIES (default mis,mis-comp,product,oracle), SEEDS (renders per strategy; relMSE is their
-# median, default 1), SAMPLER (sobol or independent; default: the renderer's, sobol) and EXTRA (more
+# median, default 1), SAMPLER (sobol, padded or independent; default: the renderer's, sobol) and EXTRA (more
 # `envpis compare` options, e.g. EXTRA="--subcells 4" for the refined product).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -94,7 +94,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--integrator", integrator, "direct or path")->type_name("I")->capture_default_str();
   sub.add_option("--heuristic", heuristic, "MIS heuristic: power or balance")->type_name("H")->capture_default_str();
   sub.add_option("--sampler", sampler,
-                 "random numbers: sobol (Owen-scrambled Sobol, stratified per pixel) or independent")
+                 "random numbers: sobol (one Owen-scrambled Sobol point per sample: pixel position and samples "
+                 "stratified jointly), padded (every pair past the pixel its own (0,2)-sequence) or independent")
       ->type_name("S")
       ->capture_default_str();
   sub.add_option("--max-depth", max_depth, "path integrator: maximum bounces")->type_name("INT")->capture_default_str();

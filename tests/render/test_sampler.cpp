@@ -92,10 +92,10 @@ int net_quality(const std::vector<Point2>& pts, int m) {
 }
 
 std::vector<Point2> pixel_points(std::uint64_t seed, std::uint64_t pixel, std::uint32_t dim, std::uint32_t first,
-                                 std::uint32_t count) {
+                                 std::uint32_t count, SamplerKind kind = SamplerKind::Sobol) {
   std::vector<Point2> pts;
   for (std::uint32_t i = first; i < first + count; ++i) {
-    PixelSampler s(SamplerKind::Sobol, seed, pixel, i);
+    PixelSampler s(kind, seed, pixel, i);
     s.set_dimension(dim);
     pts.push_back(s.next2d());
   }
@@ -127,6 +127,30 @@ TEST(PixelSampler, SobolPairsAreNetsForEveryPrefixAndBlock) {
           }
     }
   }
+}
+
+// Padded: every pair is a (0,2)-sequence, so vertex 0's light and BSDF samples are (0,m,2)-nets for
+// every prefix and aligned block, where the full sequence's pairs at those dimensions have t up to 3
+// (docs/sampling.md: what each costs where).
+TEST(PixelSampler, PaddedPairsAreZeroNetsWhereTheFullSequencesAreNot) {
+  const SamplerKind kind = SamplerKind::Padded;
+  for (std::uint32_t dim : {0u, 2u, 4u, 10u, 12u, 64u})
+    for (int m = 0; m <= 10; ++m)
+      for (std::uint64_t seed : {0ull, 7ull})
+        for (std::uint64_t pixel : {0ull, 1234ull})
+          for (std::uint32_t k : {0u, 1u, 5u})
+            ASSERT_TRUE(is_net(pixel_points(seed, pixel, dim, k << m, 1u << m, kind), m, 0))
+                << "seed " << seed << " pixel " << pixel << " dim " << dim << " m " << m << " block " << k;
+  // The full sequence at the light and BSDF pairs: not (0,m,2)-nets at some m <= 8.
+  for (std::uint32_t dim : {2u, 4u}) {
+    bool worse = false;
+    for (int m = 1; m <= 8; ++m) worse = worse || !is_net(pixel_points(3, 5, dim, 0, 1u << m), m, 0);
+    EXPECT_TRUE(worse) << "dim " << dim;
+  }
+  // Two pairs of one sample are decorrelated: each has its own scramble and index shuffle.
+  PixelSampler s(kind, 1, 2, 3);
+  const Point2 p = s.next2d(), q = s.next2d();
+  EXPECT_NE(p.x, q.x);
 }
 
 TEST(PixelSampler, SobolIsStratifiedAcrossPairs) {
@@ -165,7 +189,7 @@ TEST(PixelSampler, SobolSingleDimensionsAreStratified) {
 }
 
 TEST(PixelSampler, DeterministicAndDecorrelated) {
-  for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent}) {
+  for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Padded, SamplerKind::Independent}) {
     PixelSampler a(kind, 7, 123, 4), b(kind, 7, 123, 4), c(kind, 7, 124, 4), d(kind, 8, 123, 4);
     for (int i = 0; i < 16; ++i) {
       const Point2 pa = a.next2d(), pb = b.next2d();
@@ -202,7 +226,10 @@ TEST(PixelSampler, IndependentIsUniform) {
 TEST(PixelSampler, ParsesItsNames) {
   EXPECT_EQ(parse_sampler("sobol"), SamplerKind::Sobol);
   EXPECT_EQ(parse_sampler("independent"), SamplerKind::Independent);
+  EXPECT_EQ(parse_sampler("padded"), SamplerKind::Padded);
   EXPECT_STREQ(to_string(SamplerKind::Sobol), "sobol");
+  EXPECT_STREQ(to_string(SamplerKind::Padded), "padded");
+  EXPECT_STREQ(to_string(SamplerKind::Independent), "independent");
   EXPECT_THROW(parse_sampler("pmj"), Error);
 }
 
