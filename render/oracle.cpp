@@ -82,9 +82,12 @@ OracleSampler::Point OracleSampler::evaluate(const ShadingContext& sc, Point2 sq
                                              bool skip_below) const {
   const Vec3 wi = equal_area_square_to_sphere(sq);
   const Vec3 wl = sc.frame->to_local(wi);
-  Point p{c, 0.0f, q, sc.bsdf->pdf(sc.wo_local, wl)};
-  if (skip_below && !(wl.z > 0)) return p;
-  const Rgb f = sc.bsdf->eval(sc.wo_local, wl);
+  Point p{c, 0.0f, q, 0.0f};
+  if (skip_below && !(wl.z > 0)) {
+    p.pb = sc.bsdf->pdf(sc.wo_local, wl);
+    return p;
+  }
+  const Rgb f = sc.bsdf->eval_pdf(sc.wo_local, wl, &p.pb);
   if (!(f.average() > 0)) return p;
   const float g = (f * radiance).average() * std::fabs(wl.z);
   p.g = std::isfinite(g) && g > 0 ? g : 0.0f;
@@ -266,9 +269,10 @@ void OracleSampler::texel_weights(int c, float* out) const {
           equal_area_square_to_sphere({(float(x0 + x) + 0.5f) * inv_n, (float(y0 + y) + 0.5f) * inv_n}));
       double w = 0;
       if (!skip_below || wl.z > 0) {
-        const Rgb f = sc_.bsdf->eval(sc_.wo_local, wl);
+        float pb = 0;
+        const Rgb f = compensate ? sc_.bsdf->eval_pdf(sc_.wo_local, wl, &pb) : sc_.bsdf->eval(sc_.wo_local, wl);
         const double g = double((f * cells_->radiance(c, x, y)).average()) * std::fabs(wl.z) * inv_total;
-        w = compensate ? compensated(g, double(sc_.bsdf->pdf(sc_.wo_local, wl))) : g;
+        w = compensate ? compensated(g, double(pb)) : g;
         if (!(w > 0) || !std::isfinite(w)) w = 0;
       }
       out[y * F + x] = static_cast<float>(w);
