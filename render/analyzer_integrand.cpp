@@ -77,14 +77,15 @@ bool PointEvaluator::eval(Vec3 d, Radiance radiance, FixedPdf fixed_pdf, Directi
   if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
   // The inside of a closed surface never sees the environment (Material::set_closed_surface).
   if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
-  const Rgb fb = hm_.bsdf->eval(wo_l_, wl) * std::fabs(wl.z);
+  float p_bsdf;
+  const Rgb fb = hm_.bsdf->eval_pdf(wo_l_, wl, &p_bsdf) * std::fabs(wl.z);
   if (is_black(fb)) return false;
   const Rgb f = fb * radiance();
   if (is_black(f) || !is_finite(f)) return false;
   out->f = f;
   out->f_blind = f.average();
   if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
-  out->p_bsdf = hm_.bsdf->pdf(wo_l_, wl);
+  out->p_bsdf = p_bsdf;
   for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf(d);
   return true;
 }

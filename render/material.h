@@ -53,6 +53,12 @@ class Lobe {
   virtual ~Lobe() = default;
   virtual Rgb eval(Vec3 wo, Vec3 wi) const = 0;
   virtual float pdf(Vec3 wo, Vec3 wi) const = 0;
+  /// eval() and pdf() together, the same values (*pdf receives pdf()): a lobe whose two share work
+  /// (a half vector, D, Lambda) overrides it; the oracle and the analyzer need both per direction.
+  virtual Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const {
+    *pdf = this->pdf(wo, wi);
+    return eval(wo, wi);
+  }
   /// u: 2D sample, uc: a further 1D sample (e.g. reflect vs refract). nullopt when sampling fails.
   virtual std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const = 0;
   /// Directional albedo estimate used to pick this lobe in a mixture and as its proxy weight.
@@ -83,6 +89,8 @@ class Material {
   void clear_lobes() { lobes_.clear(); }
   Rgb eval(Vec3 wo, Vec3 wi) const;
   float pdf(Vec3 wo, Vec3 wi) const;
+  /// eval() and pdf() together, the same values (*pdf receives pdf()), through Lobe::eval_pdf.
+  Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const;
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const;
   /// Fills the proxy for outgoing direction wo (local frame). The caller calls
   /// ProductSampler::prepare(normal, wo_world, proxy) with the same normal the frame uses.

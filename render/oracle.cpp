@@ -27,6 +27,8 @@ constexpr int kMaxRefineSide = 32;
 // texel with importance keeps a light density, so no direction with radiance depends on the BSDF
 // sample alone, and a cell whose texels all weigh 0 (below the horizon, f = 0) is still a distribution.
 constexpr double kTexelMix = 0.01;
+// The first pass loads the row search's data of the cell this many cells ahead.
+constexpr std::size_t kPrefetchCells = 8;
 
 // The weight under MIS compensation of a cell or a texel whose share of the estimated integral is
 // `share` and which the BSDF sample reaches with probability p_bsdf (or: both as densities).
@@ -80,37 +82,52 @@ OracleSampler::Point OracleSampler::evaluate(const ShadingContext& sc, Point2 sq
                                              bool skip_below) const {
   const Vec3 wi = equal_area_square_to_sphere(sq);
   const Vec3 wl = sc.frame->to_local(wi);
-  Point p{c, 0.0f, q, sc.bsdf->pdf(sc.wo_local, wl)};
-  if (skip_below && !(wl.z > 0)) return p;
-  const Rgb f = sc.bsdf->eval(sc.wo_local, wl);
+  Point p{c, 0.0f, q, 0.0f};
+  if (skip_below && !(wl.z > 0)) {
+    p.pb = sc.bsdf->pdf(sc.wo_local, wl);
+    return p;
+  }
+  const Rgb f = sc.bsdf->eval_pdf(sc.wo_local, wl, &p.pb);
   if (!(f.average() > 0)) return p;
   const float g = (f * radiance).average() * std::fabs(wl.z);
   p.g = std::isfinite(g) && g > 0 ? g : 0.0f;
   return p;
 }
 
-// Draws k x k points in cell c and only prefetches their radiance: the draws of many cells are
-// evaluated together (evaluate_draws), so that their cache misses overlap (each cell's distribution
-// and the texels' radiance are spread over tens of MB; the misses were most of prepare's time).
+// Draws k x k points in cell c in three steps, each over the draws of many cells, so that the cache
+// misses of a step overlap (each cell's distribution and the texels' radiance are spread over tens of
+// MB; the misses were most of prepare's time): the rows here (one search per row of strata), then the
+// texels in the rows (place_draws), then the evaluation (evaluate_draws). The next step's data is
+// prefetched by each.
 void OracleSampler::light_points(const ShadingContext& sc, int c, int k, int pass) {
   const DiscreteDistribution2D& d = cells_->cell(c);
   if (!d.valid()) return;
-  const ImportanceTable& t = cells_->table();
-  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
-  const float inv_n = 1.0f / float(N), inv_k = 1.0f / float(k);
-  const float to_solid_angle = t.solid_angle_pdf(1.0f, float(F) * float(F));  // a fine texel: 4 pi / N^2 sr
-  const int x0 = (c % T) * F, y0 = (c / T) * F;
+  const float inv_k = 1.0f / float(k);
   // Every cell and pass its own random offset of the k x k strata.
   const Point2 o = offset(sc.jitter, std::uint64_t(c) * 2 + std::uint64_t(pass) + 1);
-  for (int j = 0; j < k; ++j)
-    for (int i = 0; i < k; ++i) {
-      const DiscreteDistribution2D::Sample s = d.sample({(float(i) + o.x) * inv_k, (float(j) + o.y) * inv_k});
-      const Point2 p{(float(x0 + s.x) + s.offset.x) * inv_n, (float(y0 + s.y) + s.offset.y) * inv_n};
-      const Rgb* radiance = &cells_->radiance(c, s.x, s.y);
-      __builtin_prefetch(radiance);
-      draws_.push_back({c, p, s.pmf * to_solid_angle, radiance});
-    }
+  for (int j = 0; j < k; ++j) {
+    const DiscreteDistribution2D::Sample s = d.sample_row((float(j) + o.y) * inv_k);
+    d.prefetch_row(s.y);
+    for (int i = 0; i < k; ++i) rows_.push_back({c, (float(i) + o.x) * inv_k, s});
+  }
   count_[static_cast<std::size_t>(c)] += k * k;
+}
+
+void OracleSampler::place_draws() {
+  const ImportanceTable& t = cells_->table();
+  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
+  const float inv_n = 1.0f / float(N);
+  const float to_solid_angle = t.solid_angle_pdf(1.0f, float(F) * float(F));  // a fine texel: 4 pi / N^2 sr
+  for (RowDraw& r : rows_) {
+    DiscreteDistribution2D::Sample& s = r.s;
+    cells_->cell(r.cell).sample_in_row(r.ux, &s);
+    const int x0 = (r.cell % T) * F, y0 = (r.cell / T) * F;
+    const Point2 p{(float(x0 + s.x) + s.offset.x) * inv_n, (float(y0 + s.y) + s.offset.y) * inv_n};
+    const Rgb* radiance = &cells_->radiance(r.cell, s.x, s.y);
+    __builtin_prefetch(radiance);
+    draws_.push_back({r.cell, p, s.pmf * to_solid_angle, radiance});
+  }
+  rows_.clear();
 }
 
 void OracleSampler::evaluate_draws(const ShadingContext& sc) {
@@ -165,6 +182,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
     active_.push_back(c);
   }
   points_.clear();
+  rows_.clear();
   draws_.clear();
   std::fill(count_.begin(), count_.end(), 0);
   const Point2 first = offset(sc.jitter, 0), second = offset(sc.jitter, ~std::uint64_t(0));
@@ -188,8 +206,11 @@ void OracleSampler::prepare(const ShadingContext& sc) {
     }
   // First pass: a few points in every cell; then more where the first estimate puts the integral.
   const int k0 = static_cast<int>(std::lround(std::sqrt(double(options_.directions))));
-  for (std::size_t a = 0; a < active_.size(); ++a)
+  for (std::size_t a = 0; a < active_.size(); ++a) {
+    if (a + kPrefetchCells < active_.size()) cells_->cell(active_[a + kPrefetchCells]).prefetch_rows();
     light_points(sc, active_[a], horizon_[a] ? std::max(k0, kHorizonSide) : k0, 0);
+  }
+  place_draws();
   evaluate_draws(sc);
   estimate();
   double total = 0;
@@ -200,6 +221,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
       const int k = std::min(kMaxRefineSide, static_cast<int>(std::sqrt(options_.refine_points * share)));
       if (k > 0) light_points(sc, c, k, 1);
     }
+    place_draws();
     evaluate_draws(sc);
     estimate();
     total = 0;
@@ -247,9 +269,10 @@ void OracleSampler::texel_weights(int c, float* out) const {
           equal_area_square_to_sphere({(float(x0 + x) + 0.5f) * inv_n, (float(y0 + y) + 0.5f) * inv_n}));
       double w = 0;
       if (!skip_below || wl.z > 0) {
-        const Rgb f = sc_.bsdf->eval(sc_.wo_local, wl);
+        float pb = 0;
+        const Rgb f = compensate ? sc_.bsdf->eval_pdf(sc_.wo_local, wl, &pb) : sc_.bsdf->eval(sc_.wo_local, wl);
         const double g = double((f * cells_->radiance(c, x, y)).average()) * std::fabs(wl.z) * inv_total;
-        w = compensate ? compensated(g, double(sc_.bsdf->pdf(sc_.wo_local, wl))) : g;
+        w = compensate ? compensated(g, double(pb)) : g;
         if (!(w > 0) || !std::isfinite(w)) w = 0;
       }
       out[y * F + x] = static_cast<float>(w);

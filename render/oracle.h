@@ -93,13 +93,19 @@ class OracleSampler {
     float q;   // solid-angle density of the cell's fine distribution
     float pb;  // the material's BSDF sampling density
   };
+  struct RowDraw {  // a point of a cell whose row is drawn, not yet its texel
+    int cell;
+    float ux;
+    DiscreteDistribution2D::Sample s;
+  };
   struct Draw {  // a point drawn from a cell's distribution, not yet evaluated
     int cell;
     Point2 p;
     float q;
     const Rgb* radiance;
   };
-  void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k draws in cell c
+  void light_points(const ShadingContext& sc, int c, int k, int pass);  // k x k draws in cell c into rows_
+  void place_draws();                             // every row draw's texel: rows_ into draws_
   void evaluate_draws(const ShadingContext& sc);  // every draw into points_
   Point evaluate(const ShadingContext& sc, Point2 p, int c, float q, Rgb radiance, bool skip_below) const;
   void estimate();  // cell_sum_ from points_ and count_
@@ -110,6 +116,7 @@ class OracleSampler {
   OracleOptions options_;
   DiscreteDistribution2D top_;
   std::vector<Point> points_;     // every evaluated direction of this shading point
+  std::vector<RowDraw> rows_;     // drawn rows, their texels to be drawn
   std::vector<Draw> draws_;       // drawn, to be evaluated
   std::vector<int> count_;        // per cell: points drawn from its fine distribution
   std::vector<int> active_;       // cells a light sample can use

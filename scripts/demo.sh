@@ -5,7 +5,8 @@
 # sunset.exr, direct lighting, strategies mis, mis-comp, product and oracle at equal spp and at equal
 # time, and the exact variance analysis at 2 shading points per object (compare's default; about 10-20 s
 # of it). Writes OUT/compare/ (override OUT=dir): metrics.json, images/, plots/ and the report index.html.
-# About 2-3 minutes on 2 free cores after the build (estimate from the CPU times below); the reference
+# About 2 minutes on 2 free cores after the build (BENCHMARKS.md, "The main job": 128 s measured cold,
+# about 110 s by estimate since the oracle's batched prepare and fused BSDF evaluation); the reference
 # is cached under ~/.cache/envpis/references (or $ENVPIS_CACHE_DIR), so a second run is faster.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +27,8 @@ ENV_MAP=${ENV_MAP:-/usr/share/blender/datafiles/studiolights/world/sunset.exr}
 # Measured (BENCHMARKS.md, "The main job"; Zen 5 VM, 2 vCPUs, loaded, reference not cached): the
 # compare step took 636 s of CPU before the convergence series came from prefixes of the equal-spp
 # renders (the oracle was rendered 16 + 15 + 1 spp) and 287 s after (16 + 1 spp), 237 s of it the
-# oracle's equal-spp render.
+# oracle's equal-spp render; then 16-27% less CPU with the oracle's batched prepare and fused BSDF
+# evaluation (two interleaved rounds, loaded).
 "$BUILD/apps/envpis/envpis" compare --scene fig1 --env "$ENV_MAP" --integrator direct \
   --strategies mis,mis-comp,product,oracle --spp 16 --ref-spp 1024 --equal-time auto \
   --width 384 --height 64 --oracle-res 32 --oracle-dirs 4 --out "$OUT/compare"

@@ -61,6 +61,21 @@ class DiscreteDistribution2D {
 
   /// A row with u.y, then a cell of the row with u.x; u in [0,1)^2 (clamped).
   Sample sample(Point2 u) const;
+  /// sample() in its two steps, for a caller that draws from many distributions at once and lets the
+  /// cache misses of one step overlap before the next (render/oracle.cpp): the row for u.y (y and
+  /// offset.y), then the cell of that row for u.x. sample_row(u.y) then sample_in_row(u.x) is sample(u).
+  Sample sample_row(float uy) const;
+  void sample_in_row(float ux, Sample* s) const;
+  /// Starts loading the row search's data, or row y's masses, into the cache.
+  void prefetch_rows() const {
+    __builtin_prefetch(row_cdf_.data());
+    __builtin_prefetch(row_sum_.data());
+  }
+  void prefetch_row(int y) const {
+    const float* row = mass_.data() + static_cast<std::size_t>(y) * w_;
+    for (int x = 0; x < w_; x += 16) __builtin_prefetch(row + x);
+    __builtin_prefetch(row + w_ - 1);
+  }
   /// The u that sample() maps to cell (x, y) and `offset`; inverse of sample() on cells with mass.
   Point2 invert(int x, int y, Point2 offset) const;
 
@@ -79,7 +94,13 @@ inline float clamp_unit(float u) { return std::min(std::max(u, 0.0f), kOneMinusE
 
 // Inline: the product sampler draws one sample per shading point right after update().
 inline DiscreteDistribution2D::Sample DiscreteDistribution2D::sample(Point2 u) const {
-  const float uy = detail::clamp_unit(u.y) * total_, ux = detail::clamp_unit(u.x);
+  Sample s = sample_row(u.y);
+  sample_in_row(u.x, &s);
+  return s;
+}
+
+inline DiscreteDistribution2D::Sample DiscreteDistribution2D::sample_row(float u) const {
+  const float uy = detail::clamp_unit(u) * total_;
   const float* rows = row_cdf_.data();
   Sample s;
   s.y = static_cast<int>(std::min<long>(std::upper_bound(rows, rows + h_, uy) - rows, h_ - 1));
@@ -87,28 +108,31 @@ inline DiscreteDistribution2D::Sample DiscreteDistribution2D::sample(Point2 u) c
   const float row_start = s.y > 0 ? rows[s.y - 1] : 0.0f;
   const float row_mass = row_sum_[s.y];
   s.offset.y = row_mass > 0 ? detail::clamp_unit((uy - row_start) / row_mass) : 0.5f;
-  const float target = ux * row_mass;
-  const float* row = mass_.data() + static_cast<std::size_t>(s.y) * w_;
+  return s;
+}
+
+inline void DiscreteDistribution2D::sample_in_row(float u, Sample* s) const {
+  const float target = detail::clamp_unit(u) * row_sum_[s->y];
+  const float* row = mass_.data() + static_cast<std::size_t>(s->y) * w_;
   // The first cell whose running sum exceeds the target; if rounding leaves the target at the row's
   // end, the last cell with mass. Cells without mass are never chosen.
   float run = 0, start = 0;
-  s.x = -1;
+  s->x = -1;
   for (int x = 0; x < w_; ++x) {
     const float m = row[x];
     if (!(m > 0)) continue;
-    s.x = x;
+    s->x = x;
     start = run;
     run += m;
     if (run > target) break;
   }
-  if (s.x < 0) {  // an empty row: only when the whole distribution is (not valid())
-    s.x = 0;
-    s.offset.x = 0.5f;
-    return s;
+  if (s->x < 0) {  // an empty row: only when the whole distribution is (not valid())
+    s->x = 0;
+    s->offset.x = 0.5f;
+    return;
   }
-  s.offset.x = detail::clamp_unit((target - start) / row[s.x]);
-  s.pmf = row[s.x] * inv_total_;
-  return s;
+  s->offset.x = detail::clamp_unit((target - start) / row[s->x]);
+  s->pmf = row[s->x] * inv_total_;
 }
 
 

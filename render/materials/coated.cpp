@@ -46,22 +46,12 @@ class CoatedDiffuseLobe final : public Lobe {
     base_albedo_ = {albedo(base_.r), albedo(base_.g), albedo(base_.b)};
   }
 
-  Rgb eval(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
-    if (wo.z < 0) {
-      wo = -wo;
-      wi = -wi;
-    }
-    return eval_up(wo, wi);
-  }
-
-  float pdf(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return 0.0f;
-    if (wo.z < 0) {
-      wo = -wo;
-      wi = -wi;
-    }
-    return pdf_up(wo, wi);
+  Rgb eval(Vec3 wo, Vec3 wi) const override { return terms<true, false>(wo, wi).f; }
+  float pdf(Vec3 wo, Vec3 wi) const override { return terms<false, true>(wo, wi).pdf; }
+  Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const override {
+    const Terms t = terms<true, true>(wo, wi);
+    *pdf = t.pdf;
+    return t.f;
   }
 
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const override {
@@ -78,7 +68,8 @@ class CoatedDiffuseLobe final : public Lobe {
     } else {
       wi = lobe::sample_cosine_hemisphere(u);
     }
-    auto r = lobe::make_sample(wo, wi * s, eval_up(wo_up, wi), pdf_up(wo_up, wi));
+    const Terms t = terms_up<true, true>(wo_up, wi);
+    auto r = lobe::make_sample(wo, wi * s, t.f, t.pdf);
     if (r) r->diffuse = !from_coat;
     return r;
   }
@@ -122,20 +113,38 @@ class CoatedDiffuseLobe final : public Lobe {
     return e + d > 0 ? e / (e + d) : (coat_ ? 1.0f : 0.0f);
   }
 
-  Rgb eval_up(Vec3 wo, Vec3 wi) const {
-    if (!(wi.z > 0)) return {};
-    float cos_h;
-    const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
-    const float coat = g > 0 && coat_ ? microfacet::fresnel_dielectric(cos_h, eta_) * g : 0.0f;
-    const float t = (1.0f - table_.reflection(wo.z)) * (1.0f - table_.reflection(wi.z));
-    return Rgb{coat, coat, coat} + base_scale_ * t;
+  struct Terms {
+    Rgb f;
+    float pdf = 0;
+  };
+
+  /// f and / or the pdf (kValue, kPdf): one body for eval, pdf and eval_pdf.
+  template <bool kValue, bool kPdf>
+  Terms terms(Vec3 wo, Vec3 wi) const {
+    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
+    if (wo.z < 0) {
+      wo = -wo;
+      wi = -wi;
+    }
+    return terms_up<kValue, kPdf>(wo, wi);
   }
 
-  float pdf_up(Vec3 wo, Vec3 wi) const {
-    if (!(wi.z > 0)) return 0.0f;
-    const float pc = coat_probability(wo.z);
-    return pc * microfacet::ggx_reflection_pdf(wo, wi, alpha_) +
-           (1.0f - pc) * lobe::cosine_hemisphere_pdf(wi.z);
+  /// The same for wo above the surface.
+  template <bool kValue, bool kPdf>
+  Terms terms_up(Vec3 wo, Vec3 wi) const {
+    Terms t;
+    if (!(wi.z > 0)) return t;
+    const microfacet::GgxReflection g = microfacet::ggx_reflection_terms<kValue, kPdf>(wo, wi, alpha_);
+    if (kValue) {
+      const float coat = g.value > 0 && coat_ ? microfacet::fresnel_dielectric(g.cos_h, eta_) * g.value : 0.0f;
+      const float b = (1.0f - table_.reflection(wo.z)) * (1.0f - table_.reflection(wi.z));
+      t.f = Rgb{coat, coat, coat} + base_scale_ * b;
+    }
+    if (kPdf) {
+      const float pc = coat_probability(wo.z);
+      t.pdf = pc * g.pdf + (1.0f - pc) * lobe::cosine_hemisphere_pdf(wi.z);
+    }
+    return t;
   }
 
   Rgb base_;

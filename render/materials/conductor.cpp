@@ -26,24 +26,12 @@ class ConductorLobe final : public Lobe {
     table_ = microfacet::AlbedoTable::build(alpha_, [this](float c) { return fresnel(c).average(); }, 0.0f);
   }
 
-  Rgb eval(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
-    if (wo.z < 0) {
-      wo = -wo;
-      wi = -wi;
-    }
-    float cos_h;
-    const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
-    return g > 0 ? fresnel(cos_h) * g : Rgb{};
-  }
-
-  float pdf(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return 0.0f;
-    if (wo.z < 0) {
-      wo = -wo;
-      wi = -wi;
-    }
-    return microfacet::ggx_reflection_pdf(wo, wi, alpha_);
+  Rgb eval(Vec3 wo, Vec3 wi) const override { return terms<true, false>(wo, wi).f; }
+  float pdf(Vec3 wo, Vec3 wi) const override { return terms<false, true>(wo, wi).pdf; }
+  Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const override {
+    const Terms t = terms<true, true>(wo, wi);
+    *pdf = t.pdf;
+    return t.f;
   }
 
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float) const override {
@@ -54,7 +42,9 @@ class ConductorLobe final : public Lobe {
     if (!(dot(wo_up, m) > 0)) return std::nullopt;
     const Vec3 wi = microfacet::reflect(wo_up, m);
     if (!(wi.z > 0)) return std::nullopt;  // shadowed by the microsurface: no sample (pdf has no mass here)
-    return lobe::make_sample(wo, wi * s, eval(wo, wi * s), pdf(wo, wi * s));
+    float p;
+    const Rgb f = eval_pdf(wo, wi * s, &p);
+    return lobe::make_sample(wo, wi * s, f, p);
   }
 
   float albedo(Vec3 wo) const override { return microfacet::usable(wo) ? table_.reflection(wo.z) : 0.0f; }
@@ -76,6 +66,25 @@ class ConductorLobe final : public Lobe {
   }
 
  private:
+  struct Terms {
+    Rgb f;
+    float pdf = 0;
+  };
+  /// f and / or the pdf (kValue, kPdf): one body for eval, pdf and eval_pdf.
+  template <bool kValue, bool kPdf>
+  Terms terms(Vec3 wo, Vec3 wi) const {
+    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
+    if (wo.z < 0) {
+      wo = -wo;
+      wi = -wi;
+    }
+    const microfacet::GgxReflection g = microfacet::ggx_reflection_terms<kValue, kPdf>(wo, wi, alpha_);
+    Terms t;
+    if (kValue && g.value > 0) t.f = fresnel(g.cos_h) * g.value;
+    t.pdf = g.pdf;
+    return t;
+  }
+
   Rgb fresnel(float c) const {
     if (complex_)
       return {microfacet::fresnel_conductor(c, a_.r, b_.r), microfacet::fresnel_conductor(c, a_.g, b_.g),

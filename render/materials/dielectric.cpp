@@ -60,16 +60,12 @@ class DielectricLobe final : public Lobe {
         alpha_, [e](float c) { return microfacet::fresnel_dielectric(c, 1.0f / e); }, 1.0f / e);
   }
 
-  Rgb eval(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
-    if (wo.z > 0) return eval_up(wo, wi, eta_);
-    return eval_up(-wo, -wi, 1.0f / eta_);
-  }
-
-  float pdf(Vec3 wo, Vec3 wi) const override {
-    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return 0.0f;
-    if (wo.z > 0) return pdf_up(wo, wi, eta_);
-    return pdf_up(-wo, -wi, 1.0f / eta_);
+  Rgb eval(Vec3 wo, Vec3 wi) const override { return terms<true, false>(wo, wi).f; }
+  float pdf(Vec3 wo, Vec3 wi) const override { return terms<false, true>(wo, wi).pdf; }
+  Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const override {
+    const Terms t = terms<true, true>(wo, wi);
+    *pdf = t.pdf;
+    return t.f;
   }
 
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const override {
@@ -88,9 +84,8 @@ class DielectricLobe final : public Lobe {
     } else {
       if (!microfacet::refract(wo_up, m, eta, wi) || !(wi.z < 0)) return std::nullopt;
     }
-    const Rgb value = eval_up(wo_up, wi, eta);
-    const float p = pdf_up(wo_up, wi, eta);
-    return lobe::make_sample(wo, wi * s, value, p);
+    const Terms t = terms_up<true, true>(wo_up, wi, eta);
+    return lobe::make_sample(wo, wi * s, t.f, t.pdf);
   }
 
   float albedo(Vec3 wo) const override {
@@ -157,44 +152,60 @@ class DielectricLobe final : public Lobe {
     return d > 0 ? f / d : 1.0f;
   }
 
-  /// f for wo above the surface; eta = n_below / n_above.
-  Rgb eval_up(Vec3 wo, Vec3 wi, float eta) const {
-    if (wi.z > 0 ? !reflect_ : !refract_) return {};
-    if (wi.z > 0) {
-      float cos_h;
-      const float g = microfacet::ggx_reflection(wo, wi, alpha_, cos_h);
-      if (!(g > 0)) return {};
-      const float v = microfacet::fresnel_dielectric(cos_h, eta) * g;
-      return {v, v, v};
-    }
-    Vec3 m;
-    float co, ci;
-    if (!refraction_half_vector(wo, wi, eta, m, co, ci)) return {};
-    const float f = microfacet::fresnel_dielectric_pair(co, -ci, eta);
-    if (!(f < 1.0f)) return {};
-    const float denom = co + eta * ci;
-    const float v = (1.0f - f) * microfacet::ggx_d(m, alpha_) * microfacet::ggx_g2(wo, wi, alpha_) * co * (-ci) *
-                    eta * eta / (wo.z * (-wi.z) * denom * denom);
-    return std::isfinite(v) ? tint_ * v : Rgb{};
+  struct Terms {
+    Rgb f;
+    float pdf = 0;
+  };
+
+  /// f and / or the pdf (kValue, kPdf): one body for eval, pdf and eval_pdf.
+  template <bool kValue, bool kPdf>
+  Terms terms(Vec3 wo, Vec3 wi) const {
+    if (!microfacet::usable(wo) || !microfacet::usable(wi)) return {};
+    if (wo.z > 0) return terms_up<kValue, kPdf>(wo, wi, eta_);
+    return terms_up<kValue, kPdf>(-wo, -wi, 1.0f / eta_);
   }
 
-  /// pdf for wo above the surface; eta = n_below / n_above.
-  float pdf_up(Vec3 wo, Vec3 wi, float eta) const {
-    if (wi.z > 0) {
-      Vec3 m;
-      if (!microfacet::reflection_half_vector(wo, wi, m)) return 0.0f;
-      return reflect_probability(microfacet::fresnel_dielectric(dot(wo, m), eta)) *
-             microfacet::ggx_reflection_pdf(wo, wi, alpha_);
+  /// The same for wo above the surface; eta = n_below / n_above.
+  template <bool kValue, bool kPdf>
+  Terms terms_up(Vec3 wo, Vec3 wi, float eta) const {
+    return wi.z > 0 ? reflection_up<kValue, kPdf>(wo, wi, eta) : refraction_up<kValue, kPdf>(wo, wi, eta);
+  }
+
+  template <bool kValue, bool kPdf>
+  Terms reflection_up(Vec3 wo, Vec3 wi, float eta) const {
+    Terms t;
+    const microfacet::GgxReflection g = microfacet::ggx_reflection_terms<kValue, kPdf>(wo, wi, alpha_);
+    const float f = microfacet::fresnel_dielectric(g.cos_h, eta);
+    if (kValue && reflect_ && g.value > 0) {
+      const float v = f * g.value;
+      t.f = {v, v, v};
     }
+    if (kPdf) t.pdf = reflect_probability(f) * g.pdf;
+    return t;
+  }
+
+  template <bool kValue, bool kPdf>
+  Terms refraction_up(Vec3 wo, Vec3 wi, float eta) const {
+    Terms t;
     Vec3 m;
     float co, ci;
-    if (!refraction_half_vector(wo, wi, eta, m, co, ci)) return 0.0f;
+    if (!refraction_half_vector(wo, wi, eta, m, co, ci)) return t;
     const float f = microfacet::fresnel_dielectric_pair(co, -ci, eta);
-    if (!(f < 1.0f)) return 0.0f;
+    if (!(f < 1.0f)) return t;
     const float denom = co + eta * ci;
-    const float p = (1.0f - reflect_probability(f)) * microfacet::ggx_visible_normal_pdf(wo, m, alpha_) * eta *
-                    eta * (-ci) / (denom * denom);
-    return std::isfinite(p) ? p : 0.0f;
+    const float d = microfacet::ggx_d(m, alpha_), lambda_o = microfacet::ggx_lambda(wo, alpha_);
+    if (kValue && refract_) {
+      const float v = (1.0f - f) * d * microfacet::ggx_g2_of(lambda_o, microfacet::ggx_lambda(wi, alpha_)) * co *
+                      (-ci) * eta * eta / (wo.z * (-wi.z) * denom * denom);
+      if (std::isfinite(v)) t.f = tint_ * v;
+    }
+    if (kPdf) {
+      const float p = (1.0f - reflect_probability(f)) *
+                      microfacet::ggx_visible_normal_density(microfacet::ggx_g1_of(lambda_o), co, d, wo.z) * eta *
+                      eta * (-ci) / (denom * denom);
+      t.pdf = std::isfinite(p) ? p : 0.0f;
+    }
+    return t;
   }
 
   float alpha_, eta_;

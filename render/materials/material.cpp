@@ -89,6 +89,21 @@ float Material::pdf(Vec3 wo, Vec3 wi) const {
   return p;
 }
 
+Rgb Material::eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const {
+  *pdf = 0;
+  if (lobes_.empty() || !microfacet::usable(wo) || !microfacet::usable(wi)) return eval(wo, wi);
+  const Selection sel(lobes_, wo);
+  const bool chosen = sel.total() > 0;  // else no lobe is ever sampled: pdf 0
+  Rgb f;
+  for (std::size_t k = 0; k < lobes_.size(); ++k) {
+    float pl;
+    f = f + lobes_[k].lobe->eval_pdf(wo, wi, &pl) * lobes_[k].weight;
+    const float pk = chosen ? sel.probability(k) : 0.0f;
+    if (pk > 0) *pdf += pk * pl;
+  }
+  return f;
+}
+
 std::optional<BsdfSample> Material::sample(Vec3 wo, Point2 u, float uc) const {
   if (lobes_.empty() || !microfacet::usable(wo)) return std::nullopt;
   const Selection sel(lobes_, wo);

@@ -65,20 +65,25 @@ inline float ggx_lambda(Vec3 w, float alpha) {
   return 0.5f * t / (1.0f + std::sqrt(1.0f + t));  // == (sqrt(1 + t) - 1) / 2 without cancellation
 }
 
+/// G1 and G2 from the Lambdas of wo and wi, for a caller that needs both (the fused evaluations).
+inline float ggx_g1_of(float lambda_o) { return 1.0f / (1.0f + lambda_o); }
+inline float ggx_g2_of(float lambda_o, float lambda_i) { return 1.0f / (1.0f + lambda_o + lambda_i); }
+
 /// Smith masking G1 for GGX.
-inline float ggx_g1(Vec3 w, float alpha) { return 1.0f / (1.0f + ggx_lambda(w, alpha)); }
+inline float ggx_g1(Vec3 w, float alpha) { return ggx_g1_of(ggx_lambda(w, alpha)); }
 
 /// Height-correlated masking-shadowing G2 for GGX.
-inline float ggx_g2(Vec3 wo, Vec3 wi, float alpha) {
-  return 1.0f / (1.0f + ggx_lambda(wo, alpha) + ggx_lambda(wi, alpha));
-}
+inline float ggx_g2(Vec3 wo, Vec3 wi, float alpha) { return ggx_g2_of(ggx_lambda(wo, alpha), ggx_lambda(wi, alpha)); }
+
+/// D_wo(m) from its factors G1(wo), wo.m > 0, D(m) and wo_z > 0.
+inline float ggx_visible_normal_density(float g1_o, float wo_m, float d, float wo_z) { return g1_o * wo_m * d / wo_z; }
 
 /// Density of visible normals D_wo(m) (per solid angle of m); wo must be above the surface.
 inline float ggx_visible_normal_pdf(Vec3 wo, Vec3 m, float alpha) {
   if (!(wo.z > 0)) return 0.0f;
   const float c = dot(wo, m);
   if (!(c > 0)) return 0.0f;
-  return ggx_g1(wo, alpha) * c * ggx_d(m, alpha) / wo.z;
+  return ggx_visible_normal_density(ggx_g1(wo, alpha), c, ggx_d(m, alpha), wo.z);
 }
 
 /// Samples a microfacet normal from D_wo (Heitz 2018): stretch wo to the unit-roughness
@@ -106,25 +111,36 @@ inline bool reflection_half_vector(Vec3 wo, Vec3 wi, Vec3& m) {
   return true;
 }
 
-/// GGX reflection without Fresnel, D(m) G2(wo, wi) / (4 wo_z wi_z), for wo and wi above the surface;
-/// cos_h receives wo.m (the cosine for the Fresnel term). 0 for any other configuration.
-inline float ggx_reflection(Vec3 wo, Vec3 wi, float alpha, float& cos_h) {
-  cos_h = 0;
+/// GGX reflection without Fresnel for wo and wi above the surface: the value D(m) G2(wo, wi) /
+/// (4 wo_z wi_z) and the density D_wo(m) / (4 wo.m) of wi = reflect(wo, m) with m ~ D_wo, and
+/// cos_h = wo.m (the cosine for the Fresnel term). Value and density are 0 for any other configuration.
+struct GgxReflection {
+  float value = 0, pdf = 0, cos_h = 0;
+};
+
+/// The terms kValue and kPdf ask for, sharing the half vector, D(m) and Lambda(wo) between them.
+template <bool kValue, bool kPdf>
+inline GgxReflection ggx_reflection_terms(Vec3 wo, Vec3 wi, float alpha) {
+  GgxReflection r;
   Vec3 m;
-  if (!(wo.z > 0) || !(wi.z > 0) || !reflection_half_vector(wo, wi, m)) return 0.0f;
-  cos_h = dot(wo, m);
-  if (!(cos_h > 0)) return 0.0f;
-  return ggx_d(m, alpha) * ggx_g2(wo, wi, alpha) / (4.0f * wo.z * wi.z);
+  if (!(wo.z > 0) || !(wi.z > 0) || !reflection_half_vector(wo, wi, m)) return r;
+  r.cos_h = dot(wo, m);
+  if (!(r.cos_h > 0)) return r;
+  const float d = ggx_d(m, alpha), lambda_o = ggx_lambda(wo, alpha);
+  if constexpr (kValue) r.value = d * ggx_g2_of(lambda_o, ggx_lambda(wi, alpha)) / (4.0f * wo.z * wi.z);
+  if constexpr (kPdf) r.pdf = ggx_visible_normal_density(ggx_g1_of(lambda_o), r.cos_h, d, wo.z) / (4.0f * r.cos_h);
+  return r;
 }
 
-/// Density of wi = reflect(wo, m) with m ~ D_wo: D_wo(m) / (4 wo.m); wo and wi above the surface.
-inline float ggx_reflection_pdf(Vec3 wo, Vec3 wi, float alpha) {
-  Vec3 m;
-  if (!(wo.z > 0) || !(wi.z > 0) || !reflection_half_vector(wo, wi, m)) return 0.0f;
-  const float c = dot(wo, m);
-  if (!(c > 0)) return 0.0f;
-  return ggx_visible_normal_pdf(wo, m, alpha) / (4.0f * c);
+/// The value alone; cos_h receives wo.m.
+inline float ggx_reflection(Vec3 wo, Vec3 wi, float alpha, float& cos_h) {
+  const GgxReflection r = ggx_reflection_terms<true, false>(wo, wi, alpha);
+  cos_h = r.cos_h;
+  return r.value;
 }
+
+/// The density alone.
+inline float ggx_reflection_pdf(Vec3 wo, Vec3 wi, float alpha) { return ggx_reflection_terms<false, true>(wo, wi, alpha).pdf; }
 
 // ---- Fresnel ----
 
