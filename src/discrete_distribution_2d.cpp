@@ -10,6 +10,7 @@ constexpr int kPad = 16;  // padded_size() is a multiple of this (the widest ker
 
 // Four partial sums per row keep the adds independent (update() runs per shading point).
 float row_total(const float* row, int w) {
+  if (w == 4) return (row[0] + row[1]) + (row[2] + row[3]);  // the sub-cells: the loop's sums below
   if (w == 12)  // the default top level: the same sums without loop control
     return ((row[0] + row[4]) + row[8] + ((row[1] + row[5]) + row[9])) +
            (((row[2] + row[6]) + row[10]) + ((row[3] + row[7]) + row[11]));
@@ -40,15 +41,29 @@ DiscreteDistribution2D::DiscreteDistribution2D(const float* masses, int width, i
   update();
 }
 
-float DiscreteDistribution2D::update() {
+template <class OnRow>
+float DiscreteDistribution2D::accumulate_rows(OnRow on_row) const {
   float run = 0;
   for (int r = 0; r < h_; ++r) {
-    row_sum_[r] = row_total(mass_.data() + static_cast<std::size_t>(r) * w_, w_);
-    row_cdf_[r] = run += row_sum_[r];
+    const float t = row_total(mass_.data() + static_cast<std::size_t>(r) * w_, w_);
+    run += t;
+    on_row(r, t, run);
   }
+  return run;
+}
+
+float DiscreteDistribution2D::update() {
+  const float run = accumulate_rows([this](int r, float t, float cdf) {
+    row_sum_[r] = t;
+    row_cdf_[r] = cdf;
+  });
   total_ = run;
   inv_total_ = valid() ? 1.0f / run : 0.0f;
   return run;
+}
+
+float DiscreteDistribution2D::sum() const {
+  return accumulate_rows([](int, float, float) {});
 }
 
 Point2 DiscreteDistribution2D::invert(int x, int y, Point2 offset) const {

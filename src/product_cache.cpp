@@ -14,8 +14,8 @@ constexpr float kIorStepsPerOctave = 64.0f;
 constexpr float kIorOctaves = 4.0f;  // IOR clamped to [2^-4, 2^4]
 
 // A direction's lattice point: each component of the unit direction rounded to a multiple of 1/K,
-// packed as three 13-bit fields (|component| <= K < 4096).
-std::uint64_t lattice_point(Vec3 d, int k) {
+// packed as three 13-bit fields (|component| <= K < 4096). Inline: the key's two run in parallel.
+inline __attribute__((always_inline)) std::uint64_t lattice_point(Vec3 d, int k) {
   const Vec3 u = normalize(d);
   const float K = float(k);
   // c K + K + 1/2 >= 0, so the conversion's truncation rounds to nearest (lround is a library call);
@@ -202,14 +202,17 @@ std::size_t ProductCache::slot_for(const Key& k, bool& prepared) {
     ++hits_;
     return use(last_);
   }
-  std::size_t oldest = 0;
+  // The search compares keys only (the other samples of a pixel hit here); the oldest slot is looked
+  // for on a miss alone.
   for (std::size_t i = 0; i < keys_.size(); ++i) {
-    if (holds(i)) {
+    if (keys_[i].n == k.n && holds(i)) {
       ++hits_;
       return use(i);
     }
-    if (last_use_[i] < last_use_[oldest]) oldest = i;
   }
+  std::size_t oldest = 0;
+  for (std::size_t i = 1; i < keys_.size(); ++i)
+    if (last_use_[i] < last_use_[oldest]) oldest = i;
   ++misses_;
   keys_[oldest] = k;
   prepared = false;

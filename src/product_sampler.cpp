@@ -96,14 +96,17 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
       for (int c = 0; c < cells; ++c) prob[c] *= v[c];
     }
     if (refine_) reestimate_heaviest_cells();
-    sum = top_.update();
-    seen = top_.valid();
+    sum = top_.sum();  // the row sums only once, after the last pass below
+    seen = DiscreteDistribution2D::valid_total(sum);
   }
   // Nothing the proxy can see: environment only. A total below FLT_MIN (denormal lobe weights) counts
   // as nothing too: its reciprocal would overflow to inf and so would every pdf (found by fuzzing).
   // Through portals, a proxy that sees none of the visible cells (every portal behind an opaque
   // surface) leaves nothing to sample: invalid. Only an all-zero proxy falls back, as without portals.
-  if (!seen && view_ && prepared_.valid()) return false;
+  if (!seen && view_ && prepared_.valid()) {
+    top_.update();  // an invalid top level, as top_level() then reports
+    return false;
+  }
   if (!seen) {
     fallback_ = true;
     m = 1.0f;
@@ -120,7 +123,7 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
       const float w = prob[c], floored = std::max(w * a, r * e[c]);
       prob[c] = w > 0.0f ? floored : w;
     }
-    sum = top_.update();
+    sum = top_.sum();
   }
   if (m > 0.0f) {  // defensive mixture with the environment distribution
     const float a = m < 1.0f ? (1.0f - m) / sum : 0.0f;
@@ -129,9 +132,9 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
       // Not a * prob[c] when a == 0: the fallback after an infinite product weight would give 0 * inf = NaN.
       prob[c] = (a > 0.0f ? a * prob[c] : 0.0f) + m * e[c];
     }
-    top_.update();
   }
   // The masses stay unnormalized: the distribution scales u by the total and its pmf by the inverse.
+  top_.update();
   valid_ = top_.valid();
   return valid_;
 }
@@ -147,18 +150,20 @@ float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
   const float* env = cells.prob;  // E[s | c], or through portals the masked shares
   float masked[64];
   if (view_ && mask_subcells(c, cells.prob, w, masked)) env = masked;
-  const float sum = out.update();
-  if (!out.valid()) {
+  const float sum = out.sum();  // the row sums only once, after the floor
+  if (!DiscreteDistribution2D::valid_total(sum)) {
     std::copy(env, env + n, w);
     out.update();
     return 0.0f;
   }
   if (options_.env_floor > 0.0f) {
     const float a = 1.0f / sum, r = options_.env_floor;
-    for (int s = 0; s < n; ++s)
-      if (w[s] > 0.0f) w[s] = std::max(w[s] * a, r * env[s]);
-    out.update();
+    for (int s = 0; s < n; ++s) {  // a select, as the top level's floor: the same values as a branch
+      const float floored = std::max(w[s] * a, r * env[s]);
+      w[s] = w[s] > 0.0f ? floored : w[s];
+    }
   }
+  out.update();
   return sum;
 }
 

@@ -52,8 +52,13 @@ class DiscreteDistribution2D {
 
   /// Recomputes the row totals and their running sums from values(); returns the total.
   float update();
+  /// The total update() would return for values() as they are now, bit for bit, without storing
+  /// anything: for a caller that needs the total to rewrite the masses before update().
+  float sum() const;
   float total() const { return total_; }
-  bool valid() const { return total_ >= std::numeric_limits<float>::min() && std::isfinite(total_); }
+  bool valid() const { return valid_total(total_); }
+  /// Whether a distribution with this total is valid() (see above).
+  static bool valid_total(float t) { return t >= std::numeric_limits<float>::min() && std::isfinite(t); }
 
   /// Probability of cell (x, y), or of the cell with row-major index i = y * w + x.
   float pmf(int i) const { return mass_[static_cast<std::size_t>(i)] * inv_total_; }
@@ -84,6 +89,8 @@ class DiscreteDistribution2D {
   std::vector<float> mass_;     // padded_size() entries, w * h used
   std::vector<float> row_sum_;  // h: each row's total mass
   std::vector<float> row_cdf_;  // h: running sums of the row totals (the last is total_)
+  template <class OnRow>
+  float accumulate_rows(OnRow on_row) const;  // the running sum over the rows; on_row(r, total, run)
   float total_ = 0, inv_total_ = 0;
 };
 
