@@ -5,8 +5,8 @@
 # sunset.exr, direct lighting, strategies mis, mis-comp, product and oracle at equal spp and at equal
 # time, and the exact variance analysis at 2 shading points per object (compare's default; about 10-20 s
 # of it). Writes OUT/compare/ (override OUT=dir): metrics.json, images/, plots/ and the report index.html.
-# About 2 minutes on 2 free cores after the build (BENCHMARKS.md, "The main job": 128 s measured cold,
-# about 110 s by estimate since the oracle's batched prepare and fused BSDF evaluation); the reference
+# About 1.5 minutes on 2 free cores after the build (BENCHMARKS.md, "The main job": 92 s measured cold
+# at 50247c3, with the oracle's batched prepare and fused BSDF evaluation); the reference
 # is cached under ~/.cache/envpis/references (or $ENVPIS_CACHE_DIR), so a second run is faster.
 set -euo pipefail
 cd "$(dirname "$0")/.."
