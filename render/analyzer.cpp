@@ -299,7 +299,12 @@ std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePo
 std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint64_t jitter) const {
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit) || hit.material < 0) return std::nullopt;
-  const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, *centres_, jitter);
+  // The thread's samplers, swapped out while in use (as the grid below): safe even if a nested
+  // parallel loop ran another point on this thread.
+  std::vector<LightSampler> samplers;
+  samplers.swap(sampler_scratch_.local());
+  const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, *centres_, jitter,
+                             samplers);
   const int n = grid_resolution();
   const double texel_area = 4.0 * kPi / (double(n) * n);
   Sums s;
@@ -359,6 +364,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
     }
   }
   grid.q.swap(scratch);
+  samplers.swap(sampler_scratch_.local());
   if (!finish(s, options_, distribution_, cell_mass_, &r)) return std::nullopt;
   return r;
 }

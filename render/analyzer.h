@@ -131,6 +131,8 @@ class Analyzer {
   std::unique_ptr<const analyzer_detail::TexelCentres> centres_;  // what every point's first pass shares
   // Per thread: the first pass's grid of watched values (analyze()), kept from point to point.
   mutable tbb::enumerable_thread_specific<std::vector<std::array<float, 3>>> grid_scratch_;
+  // Per thread: a light sampler per table, prepared again at each point (their memory is kept).
+  mutable tbb::enumerable_thread_specific<std::vector<LightSampler>> sampler_scratch_;
   double build_seconds_ = 0;
 };
 

@@ -33,7 +33,7 @@ TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<
         radiance[i] = env.eval(d);
         std::size_t s = 0;
         for (auto& p : pdf)
-          if (!p.empty()) p[i] = samplers[s++].pdf(d);
+          if (!p.empty()) p[i] = samplers[s++].pdf_square({u[x], v[x]});
       }
     }
   });
@@ -41,7 +41,7 @@ TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<
 
 PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
                                const std::vector<StrategyTables>& tables, const TexelCentres& centres,
-                               std::uint64_t jitter)
+                               std::uint64_t jitter, std::vector<LightSampler>& samplers)
     : scene_(scene),
       env_(scene.environment()),
       centres_(centres),
@@ -51,7 +51,8 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
       sn_(shading_normals(hit_, mat_.transmissive, wo)),
       frame_(sn_.ns),
       wo_l_(frame_.to_local(wo)),
-      visibility_(visibility) {
+      visibility_(visibility),
+      samplers_(samplers) {
   ShadingContext sc;
   sc.n = sn_.ns;
   sc.wo = wo;
@@ -61,18 +62,20 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
   sc.cos_bent = hm_.cos_bent;
   sc.jitter = jitter;
   sc.opaque = !mat_.transmissive;
-  samplers_.reserve(tables.size());
+  if (samplers_.size() != tables.size()) {  // the thread's first point: its samplers are reused after it
+    samplers_.clear();
+    for (const StrategyTables& t : tables) samplers_.emplace_back(t);
+  }
   for (std::size_t k = 0; k < tables.size(); ++k) {
-    samplers_.emplace_back(tables[k]);
     if (k < fixed_.size() && !centres_.pdf[k].empty()) fixed_[k] = true;  // no prepare() needed
-    else samplers_.back().prepare(sc);
+    else samplers_[k].prepare(sc);
   }
 }
 
 // The direction's values; the radiance and the point-independent densities come from the callables
 // (the map and the samplers at an arbitrary point, the per-map arrays at a texel centre).
 template <class Radiance, class FixedPdf>
-bool PointEvaluator::eval(Vec3 d, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const {
+bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const {
   const Vec3 wl = frame_.to_local(d);
   if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
   // The inside of a closed surface never sees the environment (Material::set_closed_surface).
@@ -86,17 +89,21 @@ bool PointEvaluator::eval(Vec3 d, Radiance radiance, FixedPdf fixed_pdf, Directi
   out->f_blind = f.average();
   if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
   out->p_bsdf = p_bsdf;
-  for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf(d);
+  for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf_square(p);
   return true;
 }
 
+// Every density is looked up by the quadrature point's own equal-area point (LightSampler::pdf_square),
+// not by mapping its direction back to the square: the point's texel is the one the quadrature means.
 bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
   const Vec3 d = equal_area_square_to_sphere(p);
-  return eval(d, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf(d); }, out);
+  return eval(d, p, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf_square(p); }, out);
 }
 
 bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out) const {
-  return eval(centres_.direction[i], [&] { return centres_.radiance[i]; },
+  const std::size_t n = static_cast<std::size_t>(centres_.n);
+  const Point2 p{(float(i % n) + 0.5f) / float(n), (float(i / n) + 0.5f) / float(n)};  // as TexelCentres
+  return eval(centres_.direction[i], p, [&] { return centres_.radiance[i]; },
               [&](std::size_t k) { return centres_.pdf[k][i]; }, out);
 }
 

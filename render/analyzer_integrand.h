@@ -47,7 +47,8 @@ struct TexelCentres {
 class PointEvaluator {
  public:
   PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
-                 const std::vector<StrategyTables>& tables, const TexelCentres& centres, std::uint64_t jitter);
+                 const std::vector<StrategyTables>& tables, const TexelCentres& centres, std::uint64_t jitter,
+                 std::vector<LightSampler>& samplers);
   PointEvaluator(const PointEvaluator&) = delete;
   PointEvaluator& operator=(const PointEvaluator&) = delete;
 
@@ -58,7 +59,7 @@ class PointEvaluator {
 
  private:
   template <class Radiance, class FixedPdf>
-  bool eval(Vec3 d, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const;
+  bool eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const;
 
   const Scene& scene_;
   const EnvironmentMap& env_;
@@ -71,7 +72,7 @@ class PointEvaluator {
   Frame frame_;
   Vec3 wo_l_;
   bool visibility_;
-  std::vector<LightSampler> samplers_;
+  std::vector<LightSampler>& samplers_;  // the thread's, one per table (built at its first point)
   std::array<bool, kMaxDistributions> fixed_{};  // per distribution: its density is in centres_.pdf
 };
 

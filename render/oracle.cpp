@@ -319,9 +319,13 @@ DirectionSample OracleSampler::sample(Point2 u) const {
 
 float OracleSampler::pdf(Vec3 wi) const {
   if (!valid_ || !is_valid_direction(wi)) return 0.0f;
+  return pdf_square(equal_area_sphere_to_square(wi));
+}
+
+float OracleSampler::pdf_square(Point2 p) const {
+  if (!valid_ || !(p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1)) return 0.0f;
   const ImportanceTable& t = cells_->table();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
-  const Point2 p = equal_area_sphere_to_square(wi);
   const int c = t.cell_of(p);
   const float pc = top_.pmf(c);
   if (!(pc > 0)) return 0.0f;

@@ -83,6 +83,8 @@ class OracleSampler {
   void prepare(const ShadingContext& sc);
   DirectionSample sample(Point2 u) const;
   float pdf(Vec3 wi) const;
+  /// pdf() at the direction of equal-area point p, given p (ImportanceTable::pdf_square).
+  float pdf_square(Point2 p) const;
   /// The prepared top level (for tests): cell weights, or invalid when no cell has any.
   const DiscreteDistribution2D& top() const { return top_; }
 

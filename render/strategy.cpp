@@ -284,4 +284,20 @@ float LightSampler::pdf(Vec3 wi, Point2 texture) const {
   return 0;
 }
 
+float LightSampler::pdf_square(Point2 p) const {
+  switch (strategy_) {
+    case Strategy::Bsdf: return 0;
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::MisComp: return table_ ? table_->pdf_square(p) : 0.0f;
+    case Strategy::Product: return product_ ? product_->pdf_square(p) : table_ ? table_->pdf_square(p) : 0.0f;
+    case Strategy::Oracle: return oracle_ ? oracle_->pdf_square(p) : 0.0f;
+    case Strategy::EnvPortal:
+    case Strategy::MisPortal:
+    case Strategy::MisCompPortal:
+    case Strategy::ProductPortal: return pdf(equal_area_square_to_sphere(p));
+  }
+  return 0;
+}
+
 }  // namespace envpis::render

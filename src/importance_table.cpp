@@ -435,7 +435,12 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 tex
     const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(c) : env_sub_[c]).pmf(s) : 1.0f;
     return cell_pmf * sub_pmf * at.density;
   }
-  const Point2 p = equal_area_sphere_to_square(d);
+  return pdf_square(top, equal_area_sphere_to_square(d), sub);
+}
+
+float ImportanceTable::pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub) const {
+  if (empty_ || !top.valid() || !(p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1)) return 0.0f;
+  if (map_texels_) return pdf(top, square_to_sphere(p), sub);  // the map's texels are not the square's
   const Located at = locate(p);
   const float cell_pmf = top.pmf(at.cell);
   if (!(cell_pmf > 0)) return 0.0f;

@@ -524,6 +524,43 @@ TEST(ProductSampler, RefinedSamplePdfAgreeAndInvertRoundTrips) {
   }
 }
 
+// pdf_square(p) is pdf() of p's direction: the same bits wherever the round trip square -> sphere ->
+// square stays in p's texel (every point kept 1e-3 of a texel from its edges), for the table and the
+// product sampler, and on a table with the map's own texels; 0 outside the square or at NaN.
+TEST(ProductSampler, PdfSquareIsThePdfOfItsDirection) {
+  std::mt19937_64 rng(47);
+  std::uniform_real_distribution<float> U(0, 1);
+  auto tables = refined_tables();
+  ImportanceTableOptions map_texels;
+  map_texels.fine_texels = FineTexels::Map;
+  map_texels.subdivision = 2;
+  tables.emplace_back("map texels", std::make_shared<ImportanceTable>(synthetic_sky(256, 128), map_texels));
+  int k = 0;
+  for (const auto& [name, table] : tables) {
+    ProductSampler ps(*table, refined());
+    // (A table on the map's texels has no equal-area grid: any grid serves, p's direction decides.)
+    const float n = table->fine_texels() == FineTexels::Map ? 256.0f : float(table->fine_resolution());
+    for (const Config& c : random_configs(3, 90 + k++)) {
+      ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy));
+      int positive = 0;
+      for (int i = 0; i < 20000; ++i) {
+        // A point of a random texel, away from the texel's edges.
+        const Point2 p{(std::floor(U(rng) * n) + 1e-3f + 0.998f * U(rng)) / n,
+                       (std::floor(U(rng) * n) + 1e-3f + 0.998f * U(rng)) / n};
+        const Vec3 d = equal_area_square_to_sphere(p);
+        ASSERT_EQ(ps.pdf_square(p), ps.pdf(d)) << name << " " << c.label << " at " << p.x << ", " << p.y;
+        ASSERT_EQ(table->pdf_square(p), table->pdf(d)) << name << " at " << p.x << ", " << p.y;
+        positive += ps.pdf_square(p) > 0;
+      }
+      EXPECT_GT(positive, 1000) << name << " " << c.label;  // not a comparison of zeros
+    }
+    for (const Point2 bad : {Point2{-0.1f, 0.5f}, Point2{0.5f, 1.5f}, Point2{std::nanf(""), 0.5f}}) {
+      EXPECT_EQ(ps.pdf_square(bad), 0.0f) << name;
+      EXPECT_EQ(table->pdf_square(bad), 0.0f) << name;
+    }
+  }
+}
+
 // Refinement moves samples inside cells towards the lobe: for a narrow lobe under a uniform sky, the
 // refined density at the lobe's axis is higher than the paper's (which is uniform inside the cell).
 TEST(ProductSampler, RefinementConcentratesOnANarrowLobe) {

@@ -154,6 +154,10 @@ class ImportanceTable {
   /// d computes the coordinate once (eval_texture(texture) is eval(d)). sample() returns the
   /// coordinate of its direction in DirectionSample::texture when it computed it.
   float pdf(Vec3 d, Point2 texture) const { return pdf(top_, d, texture); }
+  /// pdf(d) for d = equal_area_square_to_sphere(p), given the equal-area point p: an equal-area table
+  /// locates p itself instead of mapping d back to the square (the same value but within round-off of
+  /// a texel's edge). For callers that walk the square, as a quadrature over its texels does.
+  float pdf_square(Point2 p) const { return pdf_square(top_, p); }
   /// The u that sample() maps to direction d (up to round-off), e.g. to test stratification.
   Point2 invert(Vec3 d) const { return invert(top_, d); }
 
@@ -167,6 +171,8 @@ class ImportanceTable {
   float pdf(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
   /// The same with d's texture coordinate (see pdf(d, texture)).
   float pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 texture, const SubcellLevel* sub = nullptr) const;
+  /// The same at the direction of equal-area point p (see pdf_square(p)).
+  float pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub = nullptr) const;
   Point2 invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
   /// The environment's own top level: cell (x, y) has probability E[c], c = y * T + x.
   const DiscreteDistribution2D& top_level() const { return top_; }

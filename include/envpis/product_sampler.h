@@ -134,6 +134,8 @@ class ProductSampler : private SubcellLevel {
   float pdf(Vec3 wi) const;
   /// pdf(wi), given wi's texture coordinate in the table's map (ImportanceTable::pdf(d, texture)).
   float pdf(Vec3 wi, Point2 texture) const;
+  /// pdf() at the direction of equal-area point p, given p (ImportanceTable::pdf_square).
+  float pdf_square(Point2 p) const;
   /// The u that sample() maps to direction wi (up to round-off).
   Point2 invert(Vec3 wi) const;
 
