@@ -109,8 +109,26 @@ struct QuadraturePoint {
 
 /// Adds one quadrature point's values to the sums. For the exact-T limits its square is split between
 /// the cells it straddles, as the cell masses of the environment density are.
+/// The splits of the first pass's texel columns (= rows) for each exact level: split(x / n, 1 / n, t).
+using TexelSplits = std::vector<std::vector<Split>>;
+TexelSplits texel_splits(int n, const std::vector<int>& levels) {
+  TexelSplits out;
+  for (int t : levels) {
+    out.emplace_back();
+    for (int x = 0; x < n; ++x) out.back().push_back(split(double(x) / n, 1.0 / n, t));
+  }
+  return out;
+}
+
+/// Where a quadrature point is fine texel (x, y) of the first pass, its splits come from `aligned`
+/// (the same values, computed once per point instead of once per texel).
+struct Aligned {
+  const TexelSplits* splits = nullptr;
+  int x = 0, y = 0;
+};
+
 void accumulate(const DirectionValues& v, const QuadraturePoint& q, const AnalyzerOptions& o,
-                const std::vector<int>& distribution, Sums& s) {
+                const std::vector<int>& distribution, Sums& s, Aligned aligned = {}) {
   const double w = q.w;
   double f[3], f2[3];
   for (int c = 0; c < 3; ++c) {
@@ -162,7 +180,8 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
                          p_env > 0 ? w * f2[2] / p_env : 0.0};
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
     const int t = o.exact_levels[l];
-    const Split sx = split(q.x, q.size, t), sy = split(q.y, q.size, t);
+    const Split sx = aligned.splits ? (*aligned.splits)[l][static_cast<std::size_t>(aligned.x)] : split(q.x, q.size, t);
+    const Split sy = aligned.splits ? (*aligned.splits)[l][static_cast<std::size_t>(aligned.y)] : split(q.y, q.size, t);
     for (int cy = sy.c0; cy <= sy.c1; ++cy)
       for (int cx = sx.c0; cx <= sx.c1; ++cx) {
         const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
@@ -319,6 +338,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   std::vector<std::array<float, 3>>& scratch = grid_scratch_.local();
   grid.q.swap(scratch);
   grid.q.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
+  const TexelSplits splits = texel_splits(n, options_.exact_levels);
   DirectionValues v;
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
@@ -326,7 +346,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
       if (!point.eval_centre(i, &v)) continue;
       const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
       ++r.evaluations;
-      accumulate(v, q, options_, distribution_, s);
+      accumulate(v, q, options_, distribution_, s, {&splits, x, y});
       const float fa = v.f.average();
       grid.q[i] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
                    v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
