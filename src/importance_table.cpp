@@ -61,14 +61,19 @@ void validate(const ImportanceTableOptions& options) {
     throw Error("peak ratio must be 0 (off) or in [1, 1e6]");
 }
 
+FineTexels resolve_fine_texels(FineTexels requested, const EnvironmentMap& map) {
+  if (requested != FineTexels::Auto) return requested;
+  return map.layout() == MapLayout::LatLong && map.filter() == MapFilter::Nearest ? FineTexels::Map
+                                                                                  : FineTexels::EqualArea;
+}
+
 ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
   T_ = options.top_resolution;
   S_ = options.subdivision;
   const int TS = T_ * S_;
-  FineTexels kind = options.fine_texels;
-  if (kind == FineTexels::Auto) kind = map.layout() == MapLayout::LatLong ? FineTexels::Map : FineTexels::EqualArea;
+  const FineTexels kind = resolve_fine_texels(options.fine_texels, map);
   if (kind == FineTexels::Map) {
     if (map.layout() != MapLayout::LatLong) throw Error("fine texels 'map' needs a lat-long map");
     F_ = N_ = 0;

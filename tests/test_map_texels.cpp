@@ -80,8 +80,11 @@ TEST(MapTexels, OptionsAndErrors) {
   EXPECT_THROW(ImportanceTable(square, map_options()), Error);
   ImportanceTableOptions o;
   o.fine_texels = FineTexels::Auto;
-  EXPECT_EQ(ImportanceTable(latlong, o).fine_texels(), FineTexels::Map);
+  EXPECT_EQ(ImportanceTable(latlong, o).fine_texels(), FineTexels::Map);  // nearest look-ups
+  EXPECT_EQ(ImportanceTable(random_map(16, 8, 1, MapFilter::Bilinear), o).fine_texels(), FineTexels::EqualArea);
   EXPECT_EQ(ImportanceTable(square, o).fine_texels(), FineTexels::EqualArea);
+  EXPECT_EQ(resolve_fine_texels(FineTexels::Auto, latlong), FineTexels::Map);
+  EXPECT_EQ(resolve_fine_texels(FineTexels::Map, square), FineTexels::Map);  // an explicit choice stays
   const ImportanceTable t(latlong, map_options());
   EXPECT_EQ(t.fine_resolution(), 0);
   EXPECT_GT(t.bytes_used(), 0u);

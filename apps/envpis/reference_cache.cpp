@@ -68,8 +68,8 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
     key["fine"] = base.light_table.fine_resolution;
     // Sub-cells round the fine resolution to a multiple of T S (old keys stay valid without them).
     if (base.light_table.subdivision > 1) key["subcells"] = base.light_table.subdivision;
-    if (strategy != Strategy::Oracle && base.light_table.fine_texels != FineTexels::EqualArea)
-      key["fine_texels"] = to_string(base.light_table.fine_texels);
+    const FineTexels texels = resolve_fine_texels(base.light_table.fine_texels, scene.environment());
+    if (strategy != Strategy::Oracle && texels != FineTexels::EqualArea) key["fine_texels"] = to_string(texels);
   }
   if ((strategy == Strategy::Product || strategy == Strategy::Oracle) && !scene.proxy_closed_surfaces())
     key["closed_surfaces"] = false;

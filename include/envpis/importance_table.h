@@ -65,8 +65,16 @@ struct DirectionSums;
 enum class FineTexels {
   EqualArea,  ///< N x N equal-area texels (the rule above); any map layout
   Map,        ///< the lat-long map's own texels (lat-long maps only; see below)
-  Auto,       ///< Map for a lat-long map, EqualArea for an equal-area one
+  Auto,       ///< Map for a lat-long map read with nearest look-ups, EqualArea otherwise
 };
+
+/// The texels a table built with `requested` over `map` uses (resolves Auto; never returns Auto).
+/// Why Auto picks EqualArea under bilinear look-ups: there the map's texels need a peak bound over
+/// their neighbourhood and a light sample's weight varies inside each texel, and fig1 measured every
+/// strategy's error 1.2-1.5x higher than with the finer equal-area texels (BENCHMARKS.md, fig1 at
+/// today's defaults); under nearest look-ups a sample's weight is constant per map texel, which is
+/// what the sun's highlight needs (docs/cycles.md, "The fix").
+FineTexels resolve_fine_texels(FineTexels requested, const EnvironmentMap& map);
 
 /// Parses "equal-area", "map" or "auto"; throws Error otherwise.
 FineTexels parse_fine_texels(const std::string& s);
