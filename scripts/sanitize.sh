@@ -44,7 +44,15 @@ TSAN_BUILD=${TSAN_BUILD:-build-tsan}
 #     ProductSampler.MomentsEstimateFollowsTheCellMassesBetter (82 s): the moments estimate runs in
 #     ProductSampler.MomentsKernelsMatchTheScalarKernels and in every rendered product test;
 #   Analyzer.QuadratureConverges (79 s): the analyzer runs in Analyzer.AgreesWithTheRenderersSampleVariance.
-ASAN_EXCLUDE=${ASAN_EXCLUDE-PortalRender.EveryStrategyConvergesWithPortalsOnOffAndHalf|AssetConvergence.EveryStrategyMatchesTheReferencePerObject|Regularization.FilterGlossyEveryStrategyConvergesToTheSameImage|ImportanceTable.PeakBoundCapsEveryLightSampleWeight|TexelPeak.SameBitsAsTheMaxTreeAlgorithm|ProductSampler.MomentsChiSquareOverManyConfigurations|ProductSampler.MomentsEstimateFollowsTheCellMassesBetter|Analyzer.QuadratureConverges}
+# and three more (2026-12-04: a fresh-Debian run of .ci/run took 2801 s, sanitize 1797 s of it, after the
+# equal-area tables became the default under bilinear look-ups, which cost more to build under ASan):
+#   ProductSampler.ChiSquareOverManyConfigurations (82 s): product sampling runs under ASan in
+#     ProductSampler.RefinedChiSquareOverManyConfigurations and SamplePdfEqualsPdfOfDirectionAndIntegratesToOne;
+#   Convergence.EveryStrategyMatchesReferencePerSphere (87 s): every strategy renders under ASan in the
+#     other render tests (Render.*, CompareCommand.SmallRunWritesConsistentMetricsImagesAndReport);
+#   MapTexels.ProductSamplingChiSquare (52 s): the product over map texels runs under ASan in
+#     MapTexels.SamplePdfAndInvertAgree and MapTexels.EnvironmentSamplingChiSquare.
+ASAN_EXCLUDE=${ASAN_EXCLUDE-PortalRender.EveryStrategyConvergesWithPortalsOnOffAndHalf|AssetConvergence.EveryStrategyMatchesTheReferencePerObject|Regularization.FilterGlossyEveryStrategyConvergesToTheSameImage|ImportanceTable.PeakBoundCapsEveryLightSampleWeight|TexelPeak.SameBitsAsTheMaxTreeAlgorithm|ProductSampler.MomentsChiSquareOverManyConfigurations|ProductSampler.MomentsEstimateFollowsTheCellMassesBetter|Analyzer.QuadratureConverges|ProductSampler.ChiSquareOverManyConfigurations|Convergence.EveryStrategyMatchesReferencePerSphere|MapTexels.ProductSamplingChiSquare}
 
 steps=("$@")
 [ ${#steps[@]} -eq 0 ] && steps=(asan tsan)
