@@ -22,9 +22,9 @@ TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<
       if (!pdf[k].empty()) samplers.emplace_back(tables[k]);
     const std::size_t un = static_cast<std::size_t>(n);
     std::vector<float> u(un), v(un), dx(un), dy(un), dz(un);
-    for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = (float(x) + 0.5f) / float(n);
+    for (int x = 0; x < n; ++x) u[static_cast<std::size_t>(x)] = centre(x, n);
     for (int y = rows.begin(); y < rows.end(); ++y) {
-      std::fill(v.begin(), v.end(), (float(y) + 0.5f) / float(n));
+      std::fill(v.begin(), v.end(), centre(y, n));
       equal_area_square_to_sphere(un, u.data(), v.data(), dx.data(), dy.data(), dz.data());
       for (std::size_t x = 0; x < un; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * un + x;
@@ -101,8 +101,9 @@ bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
 }
 
 bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out) const {
-  const std::size_t n = static_cast<std::size_t>(centres_.n);
-  const Point2 p{(float(i % n) + 0.5f) / float(n), (float(i / n) + 0.5f) / float(n)};  // as TexelCentres
+  const int n = centres_.n;
+  const Point2 p{TexelCentres::centre(static_cast<int>(i % std::size_t(n)), n),
+                 TexelCentres::centre(static_cast<int>(i / std::size_t(n)), n)};
   return eval(centres_.direction[i], p, [&] { return centres_.radiance[i]; },
               [&](std::size_t k) { return centres_.pdf[k][i]; }, out);
 }

@@ -41,6 +41,8 @@ struct TexelCentres {
   std::array<std::vector<float>, kMaxDistributions> pdf;
 
   TexelCentres(const EnvironmentMap& env, int n, const std::vector<StrategyTables>& tables);
+  /// The equal-area coordinate of the centre of texel x (or row y) of n.
+  static float centre(int x, int n) { return (float(x) + 0.5f) / float(n); }
 };
 
 /// Everything about one shading point that the quadrature evaluates.

@@ -323,7 +323,7 @@ float OracleSampler::pdf(Vec3 wi) const {
 }
 
 float OracleSampler::pdf_square(Point2 p) const {
-  if (!valid_ || !(p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1)) return 0.0f;
+  if (!valid_ || !in_unit_square(p)) return 0.0f;
   const ImportanceTable& t = cells_->table();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
   const int c = t.cell_of(p);

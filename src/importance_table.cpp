@@ -444,7 +444,7 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 tex
 }
 
 float ImportanceTable::pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub) const {
-  if (empty_ || !top.valid() || !(p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1)) return 0.0f;
+  if (empty_ || !top.valid() || !in_unit_square(p)) return 0.0f;
   if (map_texels_) return pdf(top, square_to_sphere(p), sub);  // the map's texels are not the square's
   const Located at = locate(p);
   const float cell_pmf = top.pmf(at.cell);

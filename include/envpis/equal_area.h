@@ -22,6 +22,9 @@ namespace envpis {
 /// Density over solid angle of a uniform density over the unit square: 1 / (4 pi).
 constexpr float kEqualAreaPdf = kInv4Pi;
 
+/// Whether p lies in the closed square [0,1]^2 (false for NaN): a point whose density is defined.
+inline bool in_unit_square(Point2 p) { return p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1; }
+
 /// Square [0,1]^2 -> unit direction. Inputs outside [0,1] are clamped.
 Vec3 equal_area_square_to_sphere(Point2 p);
 

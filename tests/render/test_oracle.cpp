@@ -55,6 +55,18 @@ std::vector<Case> cases() {
           {"glass-0.2", make_dielectric(0.2f, 1.5f), true}};
 }
 
+// The tests' shading point: a lobe that sees the sun. `frame` and `m` must outlive the context.
+ShadingContext shading_point(const Frame& frame, const Material& m, bool transmissive) {
+  ShadingContext sc;
+  sc.n = frame.n;
+  sc.wo = normalize(Vec3{0.0f, -1.0f, 0.05f});
+  sc.wo_local = frame.to_local(sc.wo);
+  sc.frame = &frame;
+  sc.bsdf = &m;
+  sc.opaque = !transmissive;
+  return sc;
+}
+
 // sample() and pdf() describe the same density, at a shading point whose lobe sees the sun.
 TEST(Oracle, PdfIsTheDensityOfItsSamples) {
   const StrategyTables tables = StrategyTables::build(*sun_sky(), Strategy::Oracle);
@@ -64,14 +76,8 @@ TEST(Oracle, PdfIsTheDensityOfItsSamples) {
     SCOPED_TRACE(cs[i].name);
     const Material m = single(cs[i].lobe, cs[i].transmissive);
     const Frame frame(normalize(Vec3{0.1f, -0.9f, 0.35f}));
-    ShadingContext sc;
-    sc.n = frame.n;
-    sc.wo = normalize(Vec3{0.0f, -1.0f, 0.05f});
-    sc.wo_local = frame.to_local(sc.wo);
-    sc.frame = &frame;
-    sc.bsdf = &m;
+    ShadingContext sc = shading_point(frame, m, cs[i].transmissive);
     sc.jitter = 0x9e3779b97f4a7c15ULL * (i + 1);
-    sc.opaque = !cs[i].transmissive;
     LightSampler light(tables);
     light.prepare(sc);
     test::Chi2Options opt = test::table_aligned(n);  // the pdf is constant on the table's texels
@@ -96,13 +102,7 @@ TEST(Oracle, PdfSquareIsThePdfOfItsDirection) {
   const Case c = cases().front();
   const Material m = single(c.lobe, c.transmissive);
   const Frame frame(normalize(Vec3{0.1f, -0.9f, 0.35f}));
-  ShadingContext sc;
-  sc.n = frame.n;
-  sc.wo = normalize(Vec3{0.0f, -1.0f, 0.05f});
-  sc.wo_local = frame.to_local(sc.wo);
-  sc.frame = &frame;
-  sc.bsdf = &m;
-  sc.opaque = !c.transmissive;
+  const ShadingContext sc = shading_point(frame, m, c.transmissive);
   for (Strategy st : {Strategy::Env, Strategy::Mis, Strategy::MisComp, Strategy::Product, Strategy::Oracle}) {
     SCOPED_TRACE(to_string(st));
     const StrategyTables tables = StrategyTables::build(*sun_sky(), st);
