@@ -85,8 +85,8 @@ struct StrategyTables {
   std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
   /// product: share prepared distributions between shading points of one key (envpis/product_cache.h),
-  /// one cache for first hits and one for deeper vertices (so that incoherent deeper vertices do not
-  /// evict the first hits' samplers); entries 0: prepare each shading point exactly.
+  /// at the first hits (a camera ray's, which repeat within a pixel); deeper vertices, whose keys almost
+  /// never repeat, are prepared exactly; entries 0: prepare each shading point exactly.
   ProductCacheOptions product_cache;
   /// product: the product distribution at path vertices of depth < product_depth (0: at every vertex),
   /// the environment table's (as mis) deeper. A function of the vertex, so its MIS weights are exact.
@@ -170,15 +170,17 @@ class LightSampler {
 
   /// Product sampler (strategy product), for tests and diagnostics.
   const ProductSampler* product_sampler() const { return product_; }
-  /// The product caches' hits and misses so far (0 without a cache).
+  /// With a product cache, the shading points that reused a prepared distribution and those that
+  /// did not (the cache's misses and the deeper vertices, prepared exactly); 0 without a cache.
   std::uint64_t product_cache_hits() const;
   std::uint64_t product_cache_misses() const;
 
  private:
   Strategy strategy_;
   const ImportanceTable* table_ = nullptr;
-  std::unique_ptr<ProductSampler> product_exact_;                 // without a cache
-  std::unique_ptr<ProductCache> product_first_, product_deeper_;  // with one
+  std::unique_ptr<ProductSampler> product_exact_;  // without a cache, and at deeper vertices
+  std::unique_ptr<ProductCache> product_first_;    // with one: a camera ray's hits
+  std::uint64_t exact_points_ = 0;                 // with a cache: the points prepared exactly
   const ProductSampler* product_ = nullptr;                      // the current shading point's
   int product_depth_ = 0;
   float product_max_roughness_ = kInfinity;

@@ -320,6 +320,44 @@ TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
   EXPECT_NE(every.product_sampler(), nullptr);
 }
 
+// With the product cache, a camera ray's hits share prepared distributions and deeper vertices are
+// prepared exactly (their keys almost never repeat): a deeper point prepared twice is two misses, a
+// first hit prepared twice one miss and one hit, and the deeper density is the exact sampler's.
+TEST(LightSampler, ProductCacheServesFirstHitsOnly) {
+  const EnvironmentMap& env = *test_sky();
+  StrategyTables t = StrategyTables::build(env, Strategy::Product);
+  t.product_cache.entries = 16;
+  const Vec3 n{0.3f, -0.8f, 0.4f}, wo{0.1f, -1.0f, 0.3f};
+  TestPoint first(make_conductor_reflectance(0.05f, {0.9f, 0.9f, 0.9f}), n, wo);
+  TestPoint deeper = first;
+  deeper.sc.frame = &deeper.frame;
+  deeper.sc.bsdf = &deeper.bsdf;
+  deeper.sc.depth = 2;
+  LightSampler ls(t);
+  ls.prepare(deeper.sc);
+  ls.prepare(deeper.sc);
+  EXPECT_EQ(ls.product_cache_hits(), 0u);
+  EXPECT_EQ(ls.product_cache_misses(), 2u);
+  ls.prepare(first.sc);
+  ls.prepare(first.sc);
+  EXPECT_EQ(ls.product_cache_hits(), 1u);
+  EXPECT_EQ(ls.product_cache_misses(), 3u);
+
+  t.product_cache.entries = 0;  // every point exactly: the deeper point's density must be this one
+  LightSampler exact(t);
+  exact.prepare(deeper.sc);
+  ls.prepare(deeper.sc);
+  PixelSampler rng(SamplerKind::Independent, 4, 5, 6);
+  int valid = 0;
+  for (int i = 0; i < 200; ++i) {
+    const DirectionSample d = exact.sample(rng.next2d());
+    if (!(d.pdf > 0)) continue;
+    ++valid;
+    EXPECT_EQ(ls.pdf(d.direction), exact.pdf(d.direction));  // the same distribution, bit for bit
+  }
+  EXPECT_GT(valid, 180);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Closed surfaces (render/scene.h): which transmissive materials get the closed-surface proxy
 
