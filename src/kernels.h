@@ -67,6 +67,7 @@ struct PortalPlanes {
 using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);
 using SphereToSquareFn = void (*)(std::size_t, const float*, const float*, const float*, float*, float*);
 using ProductWeightsFn = void (*)(const CellArrays&, const LobeParams&, float* weights);
+using FloorWeightsFn = void (*)(float* weights, const float* env, int count, float scale, float floor);
 /// The fractions v of `count` portals' shares and the full cells; returns whether any is positive.
 using PortalSharesFn = bool (*)(const PortalCellArrays&, const PortalPlanes* planes, int count, float* v,
                                 float* full);
@@ -77,6 +78,7 @@ struct Kernels {
   SquareToSphereFn square_to_sphere;
   SphereToSquareFn sphere_to_square;
   ProductWeightsFn product_weights;
+  FloorWeightsFn floor_weights;
   PortalSharesFn portal_shares;
 };
 

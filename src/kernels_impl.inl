@@ -12,7 +12,7 @@ namespace envpis::detail::ENVPIS_KERNEL_NS {
 template <class V>
 Kernels make_kernels(const char* name) {
   return {name, static_cast<int>(lanes<V>()), square_to_sphere_n<V>, sphere_to_square_n<V>, product_weights_t<V>,
-          portal_shares_t<V>};
+          floor_weights_t<V>, portal_shares_t<V>};
 }
 
 }  // namespace envpis::detail::ENVPIS_KERNEL_NS

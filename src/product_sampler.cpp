@@ -116,14 +116,10 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
   const float* e = view_ ? masked_env_.data() : table_->top_level().values();
   const float es = view_ ? masked_scale_ : 1.0f;
   if (!fallback_ && options_.env_floor > 0.0f) {  // the environment floor (see product_sampler.h)
-    const float a = 1.0f / sum, r = options_.env_floor * es;
-    // A select, not a branch: through portals the positive cells are few and scattered (a branch
-    // mispredicts), and the select vectorizes. The same values as `if (prob > 0) prob = max(...)`.
-    for (int c = 0; c < cells; ++c) {
-      const float w = prob[c], floored = std::max(w * a, r * e[c]);
-      prob[c] = w > 0.0f ? floored : w;
-    }
-    sum = top_.sum();
+    // In this instruction set's lanes, a select and not a branch: through portals the positive cells
+    // are few and scattered (a branch mispredicts). The same values as `if (prob > 0) prob = max(...)`.
+    kernels_->floor_weights(prob, e, cells, 1.0f / sum, options_.env_floor * es);
+    if (m > 0.0f) sum = top_.sum();  // only the mixture needs the floored total
   }
   if (m > 0.0f) {  // defensive mixture with the environment distribution
     const float a = m < 1.0f ? (1.0f - m) / sum : 0.0f;
@@ -156,13 +152,7 @@ float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
     out.update();
     return 0.0f;
   }
-  if (options_.env_floor > 0.0f) {
-    const float a = 1.0f / sum, r = options_.env_floor;
-    for (int s = 0; s < n; ++s) {  // a select, as the top level's floor: the same values as a branch
-      const float floored = std::max(w[s] * a, r * env[s]);
-      w[s] = w[s] > 0.0f ? floored : w[s];
-    }
-  }
+  if (options_.env_floor > 0.0f) kernels_->floor_weights(w, env, n, 1.0f / sum, options_.env_floor);
   out.update();
   return sum;
 }

@@ -148,4 +148,18 @@ __attribute__((flatten)) void product_weights_t(const CellArrays& cells, const L
   else product_weights_lobes<V, false>(cells, p, out);
 }
 
+// The environment floor on product weights w (ProductSampler): a positive w becomes max(w a, r e),
+// the rest stays as it is. Element by element, so every width gives the scalar loop's bits.
+template <class V>
+void floor_weights_t(float* w, const float* e, int count, float a, float r) {
+  constexpr std::size_t W = lanes<V>();
+  const std::size_t n = static_cast<std::size_t>(count);
+  std::size_t i = 0;
+  for (; i + W <= n; i += W) {
+    const V wv = load_any<V>(w + i);
+    store(select(wv > V(0.0f), vmax(wv * V(a), V(r) * load_any<V>(e + i)), wv), w + i);
+  }
+  for (; i < n; ++i) w[i] = w[i] > 0.0f ? std::max(w[i] * a, r * e[i]) : w[i];
+}
+
 }  // namespace envpis::detail::ENVPIS_KERNEL_NS
