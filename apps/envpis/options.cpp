@@ -111,7 +111,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--fine-texels", fine_texels,
                  "light tables: the fine level's texels: equal-area (N x N, see --fine), map (a lat-long map's own "
                  "texels: a light sample's weight is constant over each map texel; docs/cycles.md) or auto (map "
-                 "for lat-long maps); the oracle always uses equal-area")
+                 "for lat-long maps read with --env-filter nearest, else equal-area); the oracle always uses "
+                 "equal-area")
       ->type_name("equal-area|map|auto")
       ->capture_default_str();
   sub.add_option("--peak-ratio", peak_ratio,
