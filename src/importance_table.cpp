@@ -419,6 +419,14 @@ DirectionSample ImportanceTable::sample(const DiscreteDistribution2D& top, Point
   // arithmetic); near an edge, pdf() of the direction, so the two always agree.
   out.pdf = at.interior ? solid_angle_pdf(cell.pmf, in.pmf * float(S_ * S_) * (texel.pmf * float(F) * float(F)))
                         : pdf(top, out.direction, sub);
+  if (!(out.pdf > 0)) {
+    // Round-off took a point at the texel's edge into a neighbour of no importance (a compensated
+    // table has many): the texel's middle half instead, where the round trip cannot leave it.
+    CumulativeDistribution2DView::Sample inner = texel;
+    inner.offset = {0.25f + 0.5f * texel.offset.x, 0.25f + 0.5f * texel.offset.y};
+    out.direction = square_to_sphere(texel_point(leaf, TS, F, inner).p);
+    out.pdf = pdf(top, out.direction, sub);
+  }
   return out;
 }
 
