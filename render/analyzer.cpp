@@ -404,19 +404,23 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
       StrategyTables t = source(s);
       if (!t.table || t.table->fine_texels() == FineTexels::EqualArea) return t;
     }
-    return StrategyTables::build(env, s, options_.oracle, options_.product, equal_area);
+    return StrategyTables::build(env, s, options_.oracle, options_.product, equal_area, options_.product_compensation);
   };
   // Distribution 0 is the environment table (env, mis, and the limits' fine density); the product
-  // shares it, as the renderer's product strategy does.
+  // shares it, as the renderer's product strategy does, unless over the compensated table.
   tables_.push_back(build(Strategy::Mis));
   auto wants = [&](Strategy s) {
     return std::find(options_.strategies.begin(), options_.strategies.end(), s) != options_.strategies.end();
   };
   if (wants(Strategy::MisComp)) tables_.push_back(build(Strategy::MisComp));
   if (wants(Strategy::Product)) {
-    StrategyTables t = tables_.front();
-    t.strategy = Strategy::Product;
-    tables_.push_back(std::move(t));
+    if (options_.product_compensation == ProductCompensation::On) {  // its own, compensated table
+      tables_.push_back(build(Strategy::Product));
+    } else {
+      StrategyTables t = tables_.front();
+      t.strategy = Strategy::Product;
+      tables_.push_back(std::move(t));
+    }
   }
   if (wants(Strategy::Oracle)) tables_.push_back(build(Strategy::Oracle));
   for (Strategy s : options_.strategies) {

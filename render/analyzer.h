@@ -70,6 +70,9 @@ struct AnalyzerOptions {
   std::vector<int> exact_levels{12, 24, 48};  ///< T of the exact-T limits, each 1..1024
   OracleOptions oracle;
   ProductSamplerOptions product;
+  /// StrategyTables::product_compensation (the analyzer's product always uses the product: only On
+  /// changes it)
+  ProductCompensation product_compensation = ProductCompensation::Off;
   ImportanceTableOptions light_table;
 };
 

@@ -125,7 +125,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const StrategyTables* tables = options.tables;
   if (!tables) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
-                                options.light_table);
+                                options.light_table, options.product_compensation);
     own->product_cache = options.product_cache;
     own->product_depth = options.product_depth;
     own->product_cache_step = options.product_cache_step;

@@ -54,6 +54,7 @@ struct RenderOptions {
   int product_depth = 0;  ///< StrategyTables::product_depth
   float product_cache_step = 1.0f / 32.0f;  ///< StrategyTables::product_cache_step
   float product_max_roughness = kInfinity;  ///< StrategyTables::product_max_roughness
+  ProductCompensation product_compensation = ProductCompensation::Off;  ///< StrategyTables::product_compensation
   /// The light tables (env, mis, mis-comp, product; see StrategyTables::light_table): top resolution
   /// 1..256 (the paper's 12), fine resolution (0: from the map), the peak bound (0: off).
   ImportanceTableOptions light_table;

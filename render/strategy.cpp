@@ -68,13 +68,26 @@ Heuristic parse_heuristic(const std::string& s) {
 
 const char* to_string(Heuristic h) { return h == Heuristic::Power ? "power" : "balance"; }
 
+ProductCompensation parse_product_compensation(const std::string& s) {
+  if (s == "off") return ProductCompensation::Off;
+  if (s == "elsewhere") return ProductCompensation::Elsewhere;
+  if (s == "on") return ProductCompensation::On;
+  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere or on)");
+}
+
+const char* to_string(ProductCompensation c) {
+  return c == ProductCompensation::Off ? "off" : c == ProductCompensation::Elsewhere ? "elsewhere" : "on";
+}
+
 StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
-                                     const ProductSamplerOptions& product, const ImportanceTableOptions& light_table) {
+                                     const ProductSamplerOptions& product, const ImportanceTableOptions& light_table,
+                                     ProductCompensation product_compensation) {
   const auto t0 = std::chrono::steady_clock::now();
   StrategyTables t;
   t.strategy = strategy;
   t.oracle = oracle;
   t.product = product;
+  t.product_compensation = base_strategy(strategy) == Strategy::Product ? product_compensation : ProductCompensation::Off;
   if (strategy == Strategy::Oracle) {
     if (oracle.resolution < 1 || oracle.resolution > 256)
       throw Error("oracle resolution must be in 1..256, got " + std::to_string(oracle.resolution));
@@ -96,8 +109,15 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
   switch (base_strategy(strategy)) {  // a portal variant masks its base strategy's table per point
     case Strategy::Bsdf: break;
     case Strategy::Env:
-    case Strategy::Mis:
-    case Strategy::Product: t.table = std::make_shared<ImportanceTable>(env, opt); break;
+    case Strategy::Mis: t.table = std::make_shared<ImportanceTable>(env, opt); break;
+    case Strategy::Product:
+      opt.compensated = t.product_compensation == ProductCompensation::On;
+      t.table = std::make_shared<ImportanceTable>(env, opt);
+      if (t.product_compensation == ProductCompensation::Elsewhere) {
+        opt.compensated = true;
+        t.elsewhere_table = std::make_shared<ImportanceTable>(env, opt);
+      }
+      break;
     case Strategy::MisComp:
       opt.compensated = true;
       t.table = std::make_shared<ImportanceTable>(env, opt);
@@ -116,7 +136,9 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
 }
 
 LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
-    : strategy_(tables.strategy), table_(tables.table.get()) {
+    : strategy_(tables.strategy),
+      table_(tables.table.get()),
+      elsewhere_(tables.elsewhere_table ? tables.elsewhere_table.get() : tables.table.get()) {
   if (uses_portals(strategy_)) {
     if (!portals || portals->empty())
       throw Error(std::string("strategy ") + to_string(strategy_) + " needs a scene with portals");
@@ -247,7 +269,7 @@ DirectionSample LightSampler::sample(Point2 u) const {
     case Strategy::Env:
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->sample(u) : DirectionSample{};
-    case Strategy::Product: return product_ ? product_->sample(u) : table_ ? table_->sample(u) : DirectionSample{};
+    case Strategy::Product: return product_ ? product_->sample(u) : elsewhere_ ? elsewhere_->sample(u) : DirectionSample{};
     case Strategy::Oracle: return oracle_ ? oracle_->sample(u) : DirectionSample{};
     case Strategy::EnvPortal:
     case Strategy::MisPortal:
@@ -271,7 +293,7 @@ float LightSampler::pdf(Vec3 wi, Point2 texture) const {
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->pdf(wi, texture) : 0.0f;
     case Strategy::Product:
-      return product_ ? product_->pdf(wi, texture) : table_ ? table_->pdf(wi, texture) : 0.0f;
+      return product_ ? product_->pdf(wi, texture) : elsewhere_ ? elsewhere_->pdf(wi, texture) : 0.0f;
     case Strategy::Oracle: return oracle_ ? oracle_->pdf(wi) : 0.0f;
     case Strategy::EnvPortal:
     case Strategy::MisPortal:
@@ -291,7 +313,7 @@ float LightSampler::pdf_square(Point2 p) const {
     case Strategy::Env:
     case Strategy::Mis:
     case Strategy::MisComp: return table_ ? table_->pdf_square(p) : 0.0f;
-    case Strategy::Product: return product_ ? product_->pdf_square(p) : table_ ? table_->pdf_square(p) : 0.0f;
+    case Strategy::Product: return product_ ? product_->pdf_square(p) : elsewhere_ ? elsewhere_->pdf_square(p) : 0.0f;
     case Strategy::Oracle: return oracle_ ? oracle_->pdf_square(p) : 0.0f;
     case Strategy::EnvPortal:
     case Strategy::MisPortal:

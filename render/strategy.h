@@ -59,6 +59,15 @@ enum class Heuristic { Power, Balance };
 Heuristic parse_heuristic(const std::string& s);  ///< "power" | "balance"
 const char* to_string(Heuristic h);
 
+/// product: which of its light distributions take the MIS-compensated table (max(0, importance -
+/// mean), as mis-comp's; Karlik et al. 2019), leaving directions below the map's mean to the BSDF
+/// sample, which MIS then weighs fully. Off: none (the paper's). Elsewhere: the vertices that do not
+/// use the product (StrategyTables::product_max_roughness, product_depth) sample mis-comp's table
+/// instead of mis's. On: those and the product's environment factor.
+enum class ProductCompensation { Off, Elsewhere, On };
+ProductCompensation parse_product_compensation(const std::string& s);  ///< "off" | "elsewhere" | "on"
+const char* to_string(ProductCompensation c);
+
 /// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
 /// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).
 struct OracleOptions {
@@ -77,13 +86,18 @@ class OracleSampler;
 /// What a strategy needs that is built once per environment map and shared by all threads.
 struct StrategyTables {
   Strategy strategy = Strategy::Mis;
-  /// The table light samples come from (null for `bsdf`): the standard table for env, mis and product,
-  /// the compensated one for mis-comp, the oracle's finer table for oracle.
+  /// The table light samples come from (null for `bsdf`): the standard table for env and mis, the
+  /// compensated one for mis-comp, for product the one `product_compensation` names, the oracle's
+  /// finer table for oracle.
   std::shared_ptr<const ImportanceTable> table;
   OracleOptions oracle;
   /// The oracle's per-cell radiance distributions (null for the other strategies).
   std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
+  /// product: which distributions are compensated (see ProductCompensation); `table` is the
+  /// product's, `elsewhere_table` the one the vertices without the product sample (null: `table`).
+  ProductCompensation product_compensation = ProductCompensation::Off;
+  std::shared_ptr<const ImportanceTable> elsewhere_table;
   /// product: share prepared distributions between shading points of one key (envpis/product_cache.h),
   /// at the first hits (a camera ray's, which repeat within a pixel); deeper vertices, whose keys almost
   /// never repeat, are prepared exactly; entries 0: prepare each shading point exactly.
@@ -112,7 +126,8 @@ struct StrategyTables {
   /// Throws Error for invalid options (top resolutions 1..256, see ImportanceTable for the rest).
   static StrategyTables build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle = {},
                               const ProductSamplerOptions& product = {},
-                              const ImportanceTableOptions& light_table = {});
+                              const ImportanceTableOptions& light_table = {},
+                              ProductCompensation product_compensation = ProductCompensation::Off);
 };
 
 /// The shading point a light sampler prepares for.
@@ -178,6 +193,7 @@ class LightSampler {
  private:
   Strategy strategy_;
   const ImportanceTable* table_ = nullptr;
+  const ImportanceTable* elsewhere_ = nullptr;     // product: the vertices without the product
   std::unique_ptr<ProductSampler> product_exact_;  // without a cache, and at deeper vertices
   std::unique_ptr<ProductCache> product_first_;    // with one: a camera ray's hits
   std::uint64_t exact_points_ = 0;                 // with a cache: the points prepared exactly

@@ -72,6 +72,7 @@ AnalyzerOptions parse_options(const AnalyzeArgs& a, int* threads) {
     o.exact_levels.push_back(static_cast<int>(parse_integer("--exact", t, 1, 1024)));
   o.oracle = ro.oracle;
   o.product = ro.product;
+  o.product_compensation = ro.product_compensation;
   o.light_table = ro.light_table;
   validate(o);
   return o;

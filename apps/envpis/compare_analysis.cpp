@@ -35,6 +35,7 @@ AnalyzerOptions analyzer_options(const CompareSettings& settings, const RenderOp
     if (t <= fine) o.exact_levels.push_back(t);
   o.oracle = base.oracle;
   o.product = base.product;
+  o.product_compensation = base.product_compensation;
   o.light_table = base.light_table;
   return o;
 }
@@ -61,7 +62,9 @@ void analyze_shading_points(CompareSession& session, Comparison& c) {
       }
       auto it = others.find(st);
       if (it == others.end())
-        it = others.emplace(st, StrategyTables::build(env, st, base.oracle, base.product, equal_area)).first;
+        it = others.emplace(st, StrategyTables::build(env, st, base.oracle, base.product, equal_area,
+                                                      base.product_compensation))
+                 .first;
       return it->second;
     };
     const int fine = source(Strategy::Mis).table->fine_resolution();

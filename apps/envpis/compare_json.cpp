@@ -120,7 +120,11 @@ void put_sampling_options(json& j, const CompareSession& session) {
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
                           {"env_mix", base.product.env_mix},
                           {"env_floor", base.product.env_floor},
-                          {"cell_estimate", to_string(base.product.cell_estimate)}};
+                          {"cell_estimate", to_string(base.product.cell_estimate)},
+                          {"compensation", to_string(base.product_compensation)},
+                          {"max_roughness", base.product_max_roughness < render::kInfinity
+                                                ? json(base.product_max_roughness)
+                                                : json("inf")}};
   if (!common.proxy_transform.empty()) j["product_options"]["proxy_transform_name"] = common.proxy_transform;
   j["oracle_options"] = {{"resolution", base.oracle.resolution}, {"directions", base.oracle.directions}};
   j["top_resolution"] = base.light_table.top_resolution;

@@ -38,7 +38,7 @@ const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
   auto it = tables_.find(s);
   if (it == tables_.end()) {
     it = tables_.emplace(s, render::StrategyTables::build(scene.environment(), s, base.oracle, base.product,
-                                                          base.light_table))
+                                                          base.light_table, base.product_compensation))
              .first;
     it->second.product_cache = base.product_cache;
     it->second.product_depth = base.product_depth;

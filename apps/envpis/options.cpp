@@ -166,6 +166,12 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "table's (as mis) deeper; 0: at every vertex. 0..1024")
       ->type_name("D")
       ->capture_default_str();
+  sub.add_option("--product-compensation", product_compensation,
+                 "product: which distributions use the MIS-compensated table (max(0, importance - mean), as "
+                 "mis-comp's): off (none), elsewhere (the vertices without the product sample mis-comp's "
+                 "table instead of mis's) or on (those and the product's environment factor)")
+      ->type_name("off|elsewhere|on")
+      ->capture_default_str();
   sub.add_option("--product-max-roughness", product_max_roughness,
                  "product: the product distribution only at vertices with a reflection or refraction lobe "
                  "of GGX alpha <= A, the environment table's (as mis) at the others (diffuse-only, rough); with the "
@@ -287,6 +293,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (product_max_roughness != "inf")
     o.product_max_roughness = static_cast<float>(
         parse_number_in("--product-max-roughness", product_max_roughness, 0, 1, "in [0, 1] or inf"));
+  o.product_compensation =
+      with_option("--product-compensation", [&] { return parse_product_compensation(product_compensation); });
   o.product_cache.resolution =
       static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
   o.product_cache_step = static_cast<float>(

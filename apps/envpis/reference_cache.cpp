@@ -87,6 +87,8 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
   if (strategy == Strategy::Product && base.product_max_roughness < render::kInfinity)
     key["product_max_roughness"] = base.product_max_roughness;
+  if (strategy == Strategy::Product && base.product_compensation != render::ProductCompensation::Off)
+    key["product_compensation"] = to_string(base.product_compensation);
 }
 
 }  // namespace

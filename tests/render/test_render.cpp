@@ -77,6 +77,17 @@ TEST(Scenes, Fig1ObjectIdsAreEightSpheresLeftToRight) {
   for (const auto& m : means) EXPECT_GT(m.pixels, 500u) << s.objects()[m.object].name;
 }
 
+// Two-sided, family-wise 1e-3 over `tests` z-tests (Bonferroni): |z| < Phi^-1(1 - 5e-4 / tests).
+double bonferroni_z(int tests) {
+  const double alpha = 1e-3 / tests;
+  double z_max = 0;  // solve erfc(z / sqrt 2) = alpha by bisection
+  for (double lo = 0, hi = 10, i = 0; i < 100; ++i, z_max = lo) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
+  }
+  return z_max;
+}
+
 // Every strategy converges to the same per-sphere means as a reference from another strategy.
 TEST(Convergence, EveryStrategyMatchesReferencePerSphere) {
   const Scene& scene = small_fig1();
@@ -87,13 +98,7 @@ TEST(Convergence, EveryStrategyMatchesReferencePerSphere) {
   const auto m_mis = object_means(ref_mis, spheres), m_product = object_means(ref_product, spheres);
 
   const int tests = static_cast<int>(all_strategies().size()) * spheres;
-  // Two-sided, family-wise 1e-3 over all tests (Bonferroni): |z| < Phi^-1(1 - 5e-4 / tests).
-  const double alpha = 1e-3 / tests;
-  double z_max = 0;  // solve erfc(z / sqrt 2) = alpha by bisection
-  for (double lo = 0, hi = 10, i = 0; i < 100; ++i, z_max = lo) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
-  }
+  const double z_max = bonferroni_z(tests);
   std::printf("Bonferroni threshold |z| < %.2f over %d tests\n", z_max, tests);
   std::printf("%-9s", "strategy");
   for (int i = 0; i < spheres; ++i) std::printf(" %15s", fig1_sphere_names()[i].c_str());
@@ -123,6 +128,30 @@ TEST(Convergence, EveryStrategyMatchesReferencePerSphere) {
   for (int i = 0; i < spheres; ++i) {
     const double z = (m_mis[i].mean - m_product[i].mean) / std::sqrt(m_mis[i].variance + m_product[i].variance);
     EXPECT_LT(std::fabs(z), z_max) << "references disagree on " << fig1_sphere_names()[i];
+  }
+}
+
+// product with the compensated table, at its own vertices (on) or at the others (elsewhere: below
+// --product-max-roughness, here every sphere rougher than alpha 0.1 and the diffuse one), converges to
+// mis's per-sphere means: directions the compensated table leaves at zero are the BSDF sample's alone.
+TEST(Convergence, CompensatedProductMatchesReferencePerSphere) {
+  const Scene& scene = small_fig1();
+  const int spheres = 8;
+  const auto ref = object_means(render(scene, small_options(Strategy::Mis, 2048, 1000)), spheres);
+  const double z_max = bonferroni_z(2 * spheres);
+  for (ProductCompensation pc : {ProductCompensation::Elsewhere, ProductCompensation::On}) {
+    RenderOptions o = small_options(Strategy::Product, 128, 42);
+    o.product_compensation = pc;
+    o.product_max_roughness = 0.1f;
+    o.product_cache.entries = 0;  // without the cache the camera rays' hits follow the rule too
+    const RenderResult r = render(scene, o);
+    ASSERT_EQ(r.nonfinite_pixels, 0u);
+    const auto m = object_means(r, spheres);
+    for (int i = 0; i < spheres; ++i) {
+      const double z = (m[i].mean - ref[i].mean) / std::sqrt(m[i].variance + ref[i].variance);
+      EXPECT_LT(std::fabs(z), z_max) << to_string(pc) << " sphere " << fig1_sphere_names()[i] << ": mean "
+                                     << m[i].mean << " vs reference " << ref[i].mean;
+    }
   }
 }
 
@@ -267,12 +296,11 @@ TEST(LightSampler, SampleAndPdfAgreeAndIntegrateToOne) {
   }
 }
 
-// product with --product-max-roughness: the distribution a vertex draws its light sample from is the
-// one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
-// table's elsewhere, also when glossy and other vertices alternate (no stale product distribution).
-TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
-  const EnvironmentMap& env = *test_sky();
-  StrategyTables t = StrategyTables::build(env, Strategy::Product);
+// One compensation mode: product's density at glossy vertices, `elsewhere`'s at the others.
+void check_one_density_per_vertex(const EnvironmentMap& env, ProductCompensation pc, const ImportanceTable& elsewhere) {
+  SCOPED_TRACE(std::string("compensation ") + to_string(pc));
+  StrategyTables t = StrategyTables::build(env, Strategy::Product, {}, {}, {}, pc);
+  ASSERT_EQ(t.elsewhere_table != nullptr, pc == ProductCompensation::Elsewhere);
   t.product_max_roughness = 0.1f;
   const Vec3 n{0.3f, -0.8f, 0.4f}, wo{0.1f, -1.0f, 0.3f};
   TestPoint glossy(make_conductor_reflectance(0.05f, {0.9f, 0.9f, 0.9f}), n, wo);
@@ -306,14 +334,30 @@ TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
         const DirectionSample d = ls.sample(rng.next2d());
         if (!(d.pdf > 0)) continue;
         ++valid;
-        const float expected = product ? ls.product_sampler()->pdf(d.direction) : t.table->pdf(d.direction);
+        const float expected = product ? ls.product_sampler()->pdf(d.direction) : elsewhere.pdf(d.direction);
         EXPECT_NEAR(d.pdf, expected, 1e-4f * expected);
         EXPECT_NEAR(ls.pdf(d.direction), expected, 1e-4f * expected);
       }
       EXPECT_GT(valid, 450);
     }
   }
+}
+
+// product with --product-max-roughness: the distribution a vertex draws its light sample from is the
+// one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
+// table's elsewhere (mis's, or mis-comp's with compensation), also when glossy and other vertices
+// alternate (no stale product distribution).
+TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
+  const EnvironmentMap& env = *test_sky();
+  const StrategyTables mis = StrategyTables::build(env, Strategy::Mis);
+  const StrategyTables comp = StrategyTables::build(env, Strategy::MisComp);
+  check_one_density_per_vertex(env, ProductCompensation::Off, *mis.table);
+  check_one_density_per_vertex(env, ProductCompensation::Elsewhere, *comp.table);
+  check_one_density_per_vertex(env, ProductCompensation::On, *comp.table);
   // Infinity (the default): product at every vertex, the diffuse one too.
+  StrategyTables t = StrategyTables::build(env, Strategy::Product);
+  TestPoint diffuse(make_lambert({0.8f, 0.8f, 0.8f}), {0.3f, -0.8f, 0.4f}, {0.1f, -1.0f, 0.3f});
+  diffuse.sc.depth = 1;
   t.product_max_roughness = kInfinity;
   LightSampler every(t);
   every.prepare(diffuse.sc);
