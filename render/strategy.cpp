@@ -242,7 +242,7 @@ void LightSampler::prepare(const ShadingContext& sc) {
     product_ = nullptr;
     if (!product_exact_) return;
     const BsdfProxy proxy = make_proxy(sc);
-    if (!product_at(sc, proxy)) return;  // the table's distribution, as mis
+    if (!product_at(sc, proxy)) return;  // the table's distribution (elsewhere_), as mis or mis-comp
     if (product_first_ && sc.depth == 0) {
       product_ = &product_first_->prepare(sc.n, sc.wo, proxy);
     } else {

@@ -63,7 +63,8 @@ const char* to_string(Heuristic h);
 /// mean), as mis-comp's; Karlik et al. 2019), leaving directions below the map's mean to the BSDF
 /// sample, which MIS then weighs fully. Off: none (the paper's). Elsewhere: the vertices that do not
 /// use the product (StrategyTables::product_max_roughness, product_depth) sample mis-comp's table
-/// instead of mis's. On: those and the product's environment factor.
+/// instead of mis's. On: those and the product's environment factor. product-portal: its masked
+/// environment and its product share one table, so only On changes it (both compensated).
 enum class ProductCompensation { Off, Elsewhere, On };
 ProductCompensation parse_product_compensation(const std::string& s);  ///< "off" | "elsewhere" | "on"
 const char* to_string(ProductCompensation c);
