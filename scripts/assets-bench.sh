@@ -13,7 +13,8 @@
 # Override WIDTH, HEIGHT (default 128 x 72), SPP (64), REF_SPP (1024), SEEDS (3), MAX_DEPTH (8),
 # SCENES, MAPS (default: the 8 blender maps + 8 @pmndrs HDRIs), OUT, BUILD (REBUILD=0: use BUILD as is),
 # REGULARIZE (1: also the regularized runs), REGULARIZATION (the envpis options of those runs),
-# WIDEN (1: also the widen_roughness runs).
+# WIDEN (1: also the widen_roughness runs), EXTRA (more `envpis compare` options for every run, e.g.
+# EXTRA="--product-compensation on").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -27,6 +28,7 @@ MAX_DEPTH=${MAX_DEPTH:-8}
 WIDEN=${WIDEN:-1}
 REGULARIZE=${REGULARIZE:-0}
 REGULARIZATION=${REGULARIZATION:-"--filter-glossy 1 --clamp-indirect 10 --caustics none"}
+read -r -a EXTRA_ARGS <<<"${EXTRA:-}"
 ASSETS=${ENVPIS_ASSETS:-${XDG_CACHE_HOME:-$HOME/.cache}/envpis/assets}
 SCENES=${SCENES:-scenes/assets-*.json}
 PMNDRS="apartment city dawn forest lobby park studio sunset"
@@ -45,7 +47,7 @@ compare() {  # scene-file label map strategies [extra args]
   shift 4
   "$BUILD/apps/envpis/envpis" compare --scene "$scene" --env "$map" --integrator path --max-depth "$MAX_DEPTH" \
     --strategies "$strategies" --seeds "$SEEDS" --spp "$SPP" --ref-spp "$REF_SPP" --width "$WIDTH" --height "$HEIGHT" \
-    --no-convergence --quiet --out "$OUT/$label--$(map_name "$map")" "$@" 2>/dev/null | { grep -E "^overhead" || true; } | sed "s|^|  $label $(map_name "$map"): |"
+    --no-convergence --quiet --out "$OUT/$label--$(map_name "$map")" "${EXTRA_ARGS[@]}" "$@" 2>/dev/null | { grep -E "^overhead" || true; } | sed "s|^|  $label $(map_name "$map"): |"
 }
 for scene in $SCENES; do
   name=$(basename "$scene" .json)
