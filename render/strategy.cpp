@@ -113,7 +113,8 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
     case Strategy::Product:
       opt.compensated = t.product_compensation == ProductCompensation::On;
       t.table = std::make_shared<ImportanceTable>(env, opt);
-      if (t.product_compensation == ProductCompensation::Elsewhere) {
+      // product-portal samples its masked `table` at the other vertices: no second table for it.
+      if (t.product_compensation == ProductCompensation::Elsewhere && !uses_portals(strategy)) {
         opt.compensated = true;
         t.elsewhere_table = std::make_shared<ImportanceTable>(env, opt);
       }
