@@ -130,6 +130,12 @@ std::vector<Case> adversarial_cases() {
   cases.push_back({"odd-7x3", random_map(7, 3, 8, MapFilter::Bilinear), map_options(2)});
   cases.push_back({"rotated-compensated", random_map(64, 32, 9, MapFilter::Bilinear, Mat3::rotate_z(20)),
                    map_options(4, 1e-4f, 8, true)});
+  // No floor, compensated, every third texel black: most samples sit beside a texel of zero density,
+  // so a direction that round-off moves across an edge would come back with pdf 0.
+  std::vector<float> speckled(96 * 48 * 3);
+  for (int t = 0; t < 96 * 48; ++t)
+    for (int c = 0; c < 3; ++c) speckled[t * 3 + c] = (t % 96 * 7 + t / 96 * 13) % 3 == 0 ? 0.0f : 1.0f + 0.05f * float(t / 96);
+  cases.push_back({"speckled-compensated", EnvironmentMap::from_pixels(96, 48, std::move(speckled)), map_options(4, 0.0f, 8, true)});
   std::vector<float> rgb(64 * 32 * 3, 0.01f);  // one texel 1e6 times brighter than the rest
   for (int c = 0; c < 3; ++c) rgb[(5 * 64 + 17) * 3 + c] = 1e4f;
   cases.push_back({"spike", EnvironmentMap::from_pixels(64, 32, std::move(rgb)), map_options(4)});
