@@ -71,12 +71,19 @@ const char* to_string(Heuristic h) { return h == Heuristic::Power ? "power" : "b
 ProductCompensation parse_product_compensation(const std::string& s) {
   if (s == "off") return ProductCompensation::Off;
   if (s == "elsewhere") return ProductCompensation::Elsewhere;
+  if (s == "deeper") return ProductCompensation::Deeper;
   if (s == "on") return ProductCompensation::On;
-  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere or on)");
+  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere, deeper or on)");
 }
 
 const char* to_string(ProductCompensation c) {
-  return c == ProductCompensation::Off ? "off" : c == ProductCompensation::Elsewhere ? "elsewhere" : "on";
+  switch (c) {
+    case ProductCompensation::Off: return "off";
+    case ProductCompensation::Elsewhere: return "elsewhere";
+    case ProductCompensation::Deeper: return "deeper";
+    case ProductCompensation::On: return "on";
+  }
+  return "off";
 }
 
 StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
@@ -114,7 +121,9 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
       opt.compensated = t.product_compensation == ProductCompensation::On;
       t.table = std::make_shared<ImportanceTable>(env, opt);
       // product-portal samples its masked `table` at the other vertices: no second table for it.
-      if (t.product_compensation == ProductCompensation::Elsewhere && !uses_portals(strategy)) {
+      if ((t.product_compensation == ProductCompensation::Elsewhere ||
+           t.product_compensation == ProductCompensation::Deeper) &&
+          !uses_portals(strategy)) {
         opt.compensated = true;
         t.elsewhere_table = std::make_shared<ImportanceTable>(env, opt);
       }
@@ -171,6 +180,8 @@ LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)
     if (tables.product_cache.entries > 0)
       product_first_ = std::make_unique<ProductCache>(*table_, tables.product, tables.product_cache);
     product_exact_ = std::make_unique<ProductSampler>(*table_, tables.product);
+    if (tables.product_compensation == ProductCompensation::Deeper && tables.elsewhere_table)
+      product_deeper_ = std::make_unique<ProductSampler>(*tables.elsewhere_table, tables.product);
   }
   if (strategy_ == Strategy::Oracle && tables.oracle_cells)
     oracle_ = std::make_unique<OracleSampler>(tables.oracle_cells, tables.oracle);
@@ -247,8 +258,9 @@ void LightSampler::prepare(const ShadingContext& sc) {
     if (product_first_ && sc.depth == 0) {
       product_ = &product_first_->prepare(sc.n, sc.wo, proxy);
     } else {
-      product_exact_->prepare(sc.n, sc.wo, proxy);
-      product_ = product_exact_.get();
+      ProductSampler& exact = product_deeper_ && sc.depth > 0 ? *product_deeper_ : *product_exact_;
+      exact.prepare(sc.n, sc.wo, proxy);
+      product_ = &exact;
       ++exact_points_;
     }
     return;

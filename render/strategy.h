@@ -63,10 +63,13 @@ const char* to_string(Heuristic h);
 /// mean), as mis-comp's; Karlik et al. 2019), leaving directions below the map's mean to the BSDF
 /// sample, which MIS then weighs fully. Off: none (the paper's). Elsewhere: the vertices that do not
 /// use the product (StrategyTables::product_max_roughness, product_depth) sample mis-comp's table
-/// instead of mis's. On: those and the product's environment factor. product-portal: its masked
-/// environment and its product share one table, so only On changes it (both compensated).
-enum class ProductCompensation { Off, Elsewhere, On };
-ProductCompensation parse_product_compensation(const std::string& s);  ///< "off" | "elsewhere" | "on"
+/// instead of mis's. Deeper: those and the product's environment factor at the vertices after a
+/// camera ray's hit (depth >= 1); the camera ray's hit keeps the plain product. On: the product's
+/// environment factor at every vertex too. product-portal: its masked environment and its product
+/// share one table, so only On changes it (both compensated).
+enum class ProductCompensation { Off, Elsewhere, Deeper, On };
+/// "off" | "elsewhere" | "deeper" | "on"
+ProductCompensation parse_product_compensation(const std::string& s);
 const char* to_string(ProductCompensation c);
 
 /// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
@@ -96,7 +99,8 @@ struct StrategyTables {
   std::shared_ptr<const OracleCells> oracle_cells;
   ProductSamplerOptions product;
   /// product: which distributions are compensated (see ProductCompensation); `table` is the
-  /// product's, `elsewhere_table` the one the vertices without the product sample (null: `table`).
+  /// product's (a camera ray's hit's, with Deeper), `elsewhere_table` the one the vertices without
+  /// the product sample, and with Deeper also the product's at the deeper vertices (null: `table`).
   ProductCompensation product_compensation = ProductCompensation::Off;
   std::shared_ptr<const ImportanceTable> elsewhere_table;
   /// product: share prepared distributions between shading points of one key (envpis/product_cache.h),
@@ -196,6 +200,7 @@ class LightSampler {
   const ImportanceTable* table_ = nullptr;
   const ImportanceTable* elsewhere_ = nullptr;     // product: the vertices without the product
   std::unique_ptr<ProductSampler> product_exact_;  // without a cache, and at deeper vertices
+  std::unique_ptr<ProductSampler> product_deeper_;  // ProductCompensation::Deeper: the deeper vertices'
   std::unique_ptr<ProductCache> product_first_;    // with one: a camera ray's hits
   std::uint64_t exact_points_ = 0;                 // with a cache: the points prepared exactly
   const ProductSampler* product_ = nullptr;                      // the current shading point's

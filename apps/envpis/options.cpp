@@ -169,8 +169,9 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
   sub.add_option("--product-compensation", product_compensation,
                  "product: which distributions use the MIS-compensated table (max(0, importance - mean), as "
                  "mis-comp's): off (none), elsewhere (the vertices without the product sample mis-comp's "
-                 "table instead of mis's) or on (those and the product's environment factor)")
-      ->type_name("off|elsewhere|on")
+                 "table instead of mis's), deeper (those and the product's environment factor below a camera "
+                 "ray's hit) or on (at every vertex)")
+      ->type_name("off|elsewhere|deeper|on")
       ->capture_default_str();
   sub.add_option("--product-max-roughness", product_max_roughness,
                  "product: the product distribution only at vertices with a reflection or refraction lobe "

@@ -300,7 +300,8 @@ TEST(LightSampler, SampleAndPdfAgreeAndIntegrateToOne) {
 void check_one_density_per_vertex(const EnvironmentMap& env, ProductCompensation pc, const ImportanceTable& elsewhere) {
   SCOPED_TRACE(std::string("compensation ") + to_string(pc));
   StrategyTables t = StrategyTables::build(env, Strategy::Product, {}, {}, {}, pc);
-  ASSERT_EQ(t.elsewhere_table != nullptr, pc == ProductCompensation::Elsewhere);
+  const bool deeper = pc == ProductCompensation::Deeper;
+  ASSERT_EQ(t.elsewhere_table != nullptr, pc == ProductCompensation::Elsewhere || deeper);
   t.product_max_roughness = 0.1f;
   const Vec3 n{0.3f, -0.8f, 0.4f}, wo{0.1f, -1.0f, 0.3f};
   TestPoint glossy(make_conductor_reflectance(0.05f, {0.9f, 0.9f, 0.9f}), n, wo);
@@ -329,6 +330,9 @@ void check_one_density_per_vertex(const EnvironmentMap& env, ProductCompensation
       const bool product = cache > 0 ? c.product_with_cache : c.product_without;
       ls.prepare(c.point->sc);
       ASSERT_EQ(ls.product_sampler() != nullptr, product);
+      // Deeper: the plain table's product at a camera ray's hit, the compensated one's below it.
+      if (product && deeper)
+        EXPECT_EQ(&ls.product_sampler()->table(), c.point->sc.depth > 0 ? t.elsewhere_table.get() : t.table.get());
       int valid = 0;
       for (int i = 0; i < 500; ++i) {
         const DirectionSample d = ls.sample(rng.next2d());
@@ -353,6 +357,7 @@ TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
   const StrategyTables comp = StrategyTables::build(env, Strategy::MisComp);
   check_one_density_per_vertex(env, ProductCompensation::Off, *mis.table);
   check_one_density_per_vertex(env, ProductCompensation::Elsewhere, *comp.table);
+  check_one_density_per_vertex(env, ProductCompensation::Deeper, *comp.table);
   check_one_density_per_vertex(env, ProductCompensation::On, *comp.table);
   // Infinity (the default): product at every vertex, the diffuse one too.
   StrategyTables t = StrategyTables::build(env, Strategy::Product);
