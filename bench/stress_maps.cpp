@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Writes the sun stress family (tests/stress_maps.h) as lat-long OpenEXR files:
 //   envpis_stress_maps OUT_DIR [WIDTH]
-// one NAME.exr per map, for scripts/stress-bench.sh. The maps are generated, never shipped.
+// one NAME.exr per map (the family and the quadrant-boundary suns), for scripts/stress-bench.sh. The maps are generated, never shipped.
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>
@@ -22,7 +22,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::filesystem::create_directories(dir);
-  for (const auto& sm : envpis::test::stress_family()) {
+  std::vector<envpis::test::StressMap> maps = envpis::test::stress_family();
+  for (auto& sm : envpis::test::quadrant_boundary_family()) maps.push_back(std::move(sm));
+  for (const auto& sm : maps) {
     const envpis::EnvironmentMap m = envpis::test::make_stress_map(sm, w, w / 2);
     std::vector<float> rgb(static_cast<std::size_t>(w) * (w / 2) * 3);
     for (int y = 0; y < w / 2; ++y)

@@ -49,6 +49,18 @@ inline std::vector<StressMap> stress_family() {
   };
 }
 
+/// Issue 23's quadrant symptom: a sun of radius 0.5 degrees, 45 degrees up, on each of the four
+/// half-lines between the equal-area square's top-level quadrants (x = 1/2 or y = 1/2). Written by
+/// bench/envpis_stress_maps next to the family above; not part of the tests' family.
+inline std::vector<StressMap> quadrant_boundary_family() {
+  const float r = std::sqrt(1.0f - std::sqrt(0.5f));  // the square's radius of cos(theta) = sqrt(1/2)
+  const float lo = 0.5f - 0.5f * r, hi = 0.5f + 0.5f * r;
+  return {{"quadrant45-a", {{square_point(0.5f, lo), 0.5f, 1e5f}}},
+          {"quadrant45-b", {{square_point(lo, 0.5f), 0.5f, 1e5f}}},
+          {"quadrant45-c", {{square_point(0.5f, hi), 0.5f, 1e5f}}},
+          {"quadrant45-d", {{square_point(hi, 0.5f), 0.5f, 1e5f}}}};
+}
+
 /// A w x h lat-long sky (a smooth gradient, brighter at the zenith) with the suns, each texel the
 /// average over 4 x 4 points so that sub-texel suns keep their energy.
 inline EnvironmentMap make_stress_map(const StressMap& m, int w = 1024, int h = 512,
