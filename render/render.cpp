@@ -125,7 +125,10 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   const StrategyTables* tables = options.tables;
   if (!tables) {
     own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
-                                options.light_table, options.product_compensation);
+                                options.light_table,
+                                tables_compensation(options.product_compensation,
+                                                    options.integrator == IntegratorKind::Path,
+                                                    options.product_cache.entries));
     own->product_cache = options.product_cache;
     own->product_depth = options.product_depth;
     own->product_cache_step = options.product_cache_step;

@@ -86,6 +86,11 @@ const char* to_string(ProductCompensation c) {
   return "off";
 }
 
+ProductCompensation tables_compensation(ProductCompensation c, bool deeper_vertices, int cache_entries) {
+  const bool second_table = c == ProductCompensation::Elsewhere || c == ProductCompensation::Deeper;
+  return second_table && !deeper_vertices && cache_entries > 0 ? ProductCompensation::Off : c;
+}
+
 StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
                                      const ProductSamplerOptions& product, const ImportanceTableOptions& light_table,
                                      ProductCompensation product_compensation) {

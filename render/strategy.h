@@ -71,6 +71,12 @@ enum class ProductCompensation { Off, Elsewhere, Deeper, On };
 /// "off" | "elsewhere" | "deeper" | "on"
 ProductCompensation parse_product_compensation(const std::string& s);
 const char* to_string(ProductCompensation c);
+/// The compensation to build a render's tables with: Elsewhere and Deeper build a second table for the
+/// vertices after a camera ray's hit and the vertices without the product, and with the product cache
+/// (cache_entries > 0) every camera ray's hit takes the plain product, so a render without deeper
+/// vertices (the direct integrator) would never sample that table: Off then, the same images without
+/// its build. Anything else is returned as it is.
+ProductCompensation tables_compensation(ProductCompensation c, bool deeper_vertices, int cache_entries);
 
 /// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
 /// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).

@@ -38,7 +38,11 @@ const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
   auto it = tables_.find(s);
   if (it == tables_.end()) {
     it = tables_.emplace(s, render::StrategyTables::build(scene.environment(), s, base.oracle, base.product,
-                                                          base.light_table, base.product_compensation))
+                                                          base.light_table,
+                                                          render::tables_compensation(
+                                                              base.product_compensation,
+                                                              base.integrator == render::IntegratorKind::Path,
+                                                              base.product_cache.entries)))
              .first;
     it->second.product_cache = base.product_cache;
     it->second.product_depth = base.product_depth;

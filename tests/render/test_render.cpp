@@ -351,6 +351,19 @@ void check_one_density_per_vertex(const EnvironmentMap& env, ProductCompensation
 // one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
 // table's elsewhere (mis's, or mis-comp's with compensation), also when glossy and other vertices
 // alternate (no stale product distribution).
+// The second table is left out only where nothing would sample it: no deeper vertex and the cache
+// taking every camera ray's hit (LightSampler::product_at); otherwise the compensation is kept.
+TEST(LightSampler, TablesCompensationDropsOnlyTheUnsampledSecondTable) {
+  using PC = ProductCompensation;
+  EXPECT_EQ(tables_compensation(PC::Deeper, false, 16), PC::Off);
+  EXPECT_EQ(tables_compensation(PC::Elsewhere, false, 16), PC::Off);
+  EXPECT_EQ(tables_compensation(PC::Deeper, false, 0), PC::Deeper);  // rough hits sample the second table
+  EXPECT_EQ(tables_compensation(PC::Deeper, true, 16), PC::Deeper);
+  EXPECT_EQ(tables_compensation(PC::Elsewhere, true, 0), PC::Elsewhere);
+  EXPECT_EQ(tables_compensation(PC::On, false, 16), PC::On);  // one table, the product's own
+  EXPECT_EQ(tables_compensation(PC::Off, true, 0), PC::Off);
+}
+
 TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
   const EnvironmentMap& env = *test_sky();
   const StrategyTables mis = StrategyTables::build(env, Strategy::Mis);
