@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Writes the sun stress family (tests/stress_maps.h) as lat-long OpenEXR files:
 //   envpis_stress_maps OUT_DIR [WIDTH]
-// one NAME.exr per map (the family and the quadrant-boundary suns), for scripts/stress-bench.sh. The maps are generated, never shipped.
+// one NAME.exr per map (the family and the quadrant-boundary suns), for scripts/stress-bench.sh. The
+// maps are generated, never shipped.
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>

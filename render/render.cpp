@@ -88,6 +88,18 @@ void validate(const RenderOptions& o) {
                 ", not " + std::to_string(lt.top_resolution));
 }
 
+StrategyTables build_render_tables(const EnvironmentMap& env, Strategy strategy, const RenderOptions& options) {
+  StrategyTables t = StrategyTables::build(
+      env, strategy, options.oracle, options.product, options.light_table,
+      tables_compensation(options.product_compensation, options.integrator == IntegratorKind::Path,
+                          options.product_cache.entries));
+  t.product_cache = options.product_cache;
+  t.product_depth = options.product_depth;
+  t.product_cache_step = options.product_cache_step;
+  t.product_max_roughness = options.product_max_roughness;
+  return t;
+}
+
 RenderResult render(const Scene& scene, const RenderOptions& options) {
   validate(options);
   if (!scene.committed()) throw Error("render: the scene is not committed");
@@ -124,15 +136,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
   std::optional<StrategyTables> own;
   const StrategyTables* tables = options.tables;
   if (!tables) {
-    own = StrategyTables::build(scene.environment(), options.strategy, options.oracle, options.product,
-                                options.light_table,
-                                tables_compensation(options.product_compensation,
-                                                    options.integrator == IntegratorKind::Path,
-                                                    options.product_cache.entries));
-    own->product_cache = options.product_cache;
-    own->product_depth = options.product_depth;
-    own->product_cache_step = options.product_cache_step;
-    own->product_max_roughness = options.product_max_roughness;
+    own = build_render_tables(scene.environment(), options.strategy, options);
     tables = &*own;
     r.setup_seconds = own->build_seconds;
   }

@@ -115,6 +115,10 @@ struct RenderResult {
 
 /// Throws Error for invalid options (spp, size, threads, depth) or an uncommitted scene.
 RenderResult render(const Scene& scene, const RenderOptions& options);
+/// The tables a render of `strategy` with `options` samples, as render() builds them when
+/// options.tables is null: the options' table settings and the product's vertex rule, and no second
+/// table where nothing would sample it (tables_compensation).
+StrategyTables build_render_tables(const EnvironmentMap& env, Strategy strategy, const RenderOptions& options);
 
 /// Convenience form for tools that compare strategies: `base` supplies everything else.
 inline RenderResult render(const Scene& scene, Strategy strategy, int spp, std::uint64_t seed,

@@ -86,9 +86,15 @@ const char* to_string(ProductCompensation c) {
   return "off";
 }
 
+namespace {
+// Elsewhere and Deeper sample a compensated table besides the product's plain one.
+bool second_table(ProductCompensation c) {
+  return c == ProductCompensation::Elsewhere || c == ProductCompensation::Deeper;
+}
+}  // namespace
+
 ProductCompensation tables_compensation(ProductCompensation c, bool deeper_vertices, int cache_entries) {
-  const bool second_table = c == ProductCompensation::Elsewhere || c == ProductCompensation::Deeper;
-  return second_table && !deeper_vertices && cache_entries > 0 ? ProductCompensation::Off : c;
+  return second_table(c) && !deeper_vertices && cache_entries > 0 ? ProductCompensation::Off : c;
 }
 
 StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
@@ -126,9 +132,7 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
       opt.compensated = t.product_compensation == ProductCompensation::On;
       t.table = std::make_shared<ImportanceTable>(env, opt);
       // product-portal samples its masked `table` at the other vertices: no second table for it.
-      if ((t.product_compensation == ProductCompensation::Elsewhere ||
-           t.product_compensation == ProductCompensation::Deeper) &&
-          !uses_portals(strategy)) {
+      if (second_table(t.product_compensation) && !uses_portals(strategy)) {
         opt.compensated = true;
         t.elsewhere_table = std::make_shared<ImportanceTable>(env, opt);
       }

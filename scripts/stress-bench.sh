@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # The firefly tail table (issue 9): fig1, direct lighting, 64 spp, strategies mis and product, over the
 # generated sun stress family and the four quadrant-boundary suns of issue 23 (tests/stress_maps.h, written
-# by bench/envpis_stress_maps) and the eight blender maps, with --seeds 3 (medians over seeds) against a 2048-spp reference of another seed.
+# by bench/envpis_stress_maps) and the eight blender maps, with --seeds 3 (medians over seeds) against a
+# 2048-spp reference of another seed.
 # Prints one line per map and strategy: median relMSE, worst-seed max per-pixel relative squared error,
 # worst-seed count of pixels more than 10x off, and the per-sphere worst ratio product/mis of the
 # median relMSE. Override SPP, REF_SPP, SEEDS, PEAK_RATIO, MAPS, OUT, BUILD.

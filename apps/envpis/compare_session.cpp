@@ -37,17 +37,7 @@ CompareSession::CompareSession(const CompareArgs& a, const CompareSettings& s, c
 const render::StrategyTables& CompareSession::tables_for(render::Strategy s) {
   auto it = tables_.find(s);
   if (it == tables_.end()) {
-    it = tables_.emplace(s, render::StrategyTables::build(scene.environment(), s, base.oracle, base.product,
-                                                          base.light_table,
-                                                          render::tables_compensation(
-                                                              base.product_compensation,
-                                                              base.integrator == render::IntegratorKind::Path,
-                                                              base.product_cache.entries)))
-             .first;
-    it->second.product_cache = base.product_cache;
-    it->second.product_depth = base.product_depth;
-    it->second.product_cache_step = base.product_cache_step;
-    it->second.product_max_roughness = base.product_max_roughness;
+    it = tables_.emplace(s, render::build_render_tables(scene.environment(), s, base)).first;
   }
   return it->second;
 }

@@ -347,10 +347,6 @@ void check_one_density_per_vertex(const EnvironmentMap& env, ProductCompensation
   }
 }
 
-// product with --product-max-roughness: the distribution a vertex draws its light sample from is the
-// one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
-// table's elsewhere (mis's, or mis-comp's with compensation), also when glossy and other vertices
-// alternate (no stale product distribution).
 // The second table is left out only where nothing would sample it: no deeper vertex and the cache
 // taking every camera ray's hit (LightSampler::product_at); otherwise the compensation is kept.
 TEST(LightSampler, TablesCompensationDropsOnlyTheUnsampledSecondTable) {
@@ -364,6 +360,10 @@ TEST(LightSampler, TablesCompensationDropsOnlyTheUnsampledSecondTable) {
   EXPECT_EQ(tables_compensation(PC::Off, true, 0), PC::Off);
 }
 
+// product with --product-max-roughness: the distribution a vertex draws its light sample from is the
+// one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
+// table's elsewhere (mis's, or mis-comp's with compensation), also when glossy and other vertices
+// alternate (no stale product distribution).
 TEST(LightSampler, ProductAtGlossyVerticesUsesOneDensityPerVertex) {
   const EnvironmentMap& env = *test_sky();
   const StrategyTables mis = StrategyTables::build(env, Strategy::Mis);
