@@ -137,11 +137,17 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
     s.integral[c] += w * f[c];
   }
   s.integral_blind += w * v.f_blind;
+  // w / p per density, one division each (0 where the density is 0)
+  std::array<double, kMaxDistributions> w_over_pl{};
+  for (std::size_t k = 0; k < kMaxDistributions; ++k)
+    if (v.p_light[k] > 0) w_over_pl[k] = w / double(v.p_light[k]);
+  const float pb = v.p_bsdf;
+  const double w_over_pb = pb > 0 ? w / double(pb) : 0.0;
   const bool power = o.heuristic == Heuristic::Power;
   for (std::size_t i = 0; i < o.strategies.size(); ++i) {
     const Strategy st = o.strategies[i];
-    const float pl = distribution[i] >= 0 ? v.p_light[static_cast<std::size_t>(distribution[i])] : 0.0f;
-    const float pb = v.p_bsdf;
+    const int k = distribution[i];
+    const float pl = k >= 0 ? v.p_light[static_cast<std::size_t>(k)] : 0.0f;
     float wl = 1, wb = 1;  // the integrator's weights (Integrator::li)
     if (st == Strategy::Bsdf) wl = 0;
     else if (st == Strategy::Env) wb = 0;
@@ -151,14 +157,14 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
     }
     StrategySums& ss = s.strategies[i];
     if (pl > 0 && wl > 0) {
-      const double a = w * double(wl) * wl / pl, b = w * wl;
+      const double a = double(wl) * wl * w_over_pl[static_cast<std::size_t>(k)], b = w * wl;
       for (int c = 0; c < 3; ++c) {
         ss.a_light[c] += a * f2[c];
         ss.b_light[c] += b * f[c];
       }
     }
     if (pb > 0 && wb > 0) {
-      const double a = w * double(wb) * wb / pb, b = w * wb;
+      const double a = double(wb) * wb * w_over_pb, b = w * wb;
       for (int c = 0; c < 3; ++c) {
         ss.a_bsdf[c] += a * f2[c];
         ss.b_bsdf[c] += b * f[c];
@@ -166,18 +172,17 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
     }
   }
   for (std::size_t k = 0; k < kMaxDistributions; ++k) {
-    const float p_k = v.p_light[k];
-    if (!(p_k > 0)) continue;
+    if (!(v.p_light[k] > 0)) continue;
     for (int c = 0; c < 3; ++c) {
-      s.light_sq[k][c] += w * f2[c] / p_k;
+      s.light_sq[k][c] += w_over_pl[k] * f2[c];
       s.light_mean[k][c] += w * f[c];
     }
   }
-  if (v.f_blind > 0)
-    for (int c = 0; c < 3; ++c) s.product_sq[c] += w * f2[c] / v.f_blind;
-  const float p_env = v.p_light[0];
-  const double add[4] = {w * v.f_blind, p_env > 0 ? w * f2[0] / p_env : 0.0, p_env > 0 ? w * f2[1] / p_env : 0.0,
-                         p_env > 0 ? w * f2[2] / p_env : 0.0};
+  if (v.f_blind > 0) {
+    const double w_over_blind = w / double(v.f_blind);
+    for (int c = 0; c < 3; ++c) s.product_sq[c] += w_over_blind * f2[c];
+  }
+  const double add[4] = {w * v.f_blind, w_over_pl[0] * f2[0], w_over_pl[0] * f2[1], w_over_pl[0] * f2[2]};
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
     const int t = o.exact_levels[l];
     const Split sx = aligned.splits ? (*aligned.splits)[l][static_cast<std::size_t>(aligned.x)] : split(q.x, q.size, t);
@@ -216,7 +221,8 @@ std::vector<int> texels_to_refine(const TexelGrid& g, double share, double toler
         std::array<float, 3> side_sum{};
         for (int step : {-1, 1}) {
           int nx = x + (axis == 0 ? step : 0), ny = y + (axis == 1 ? step : 0);
-          equal_area_wrap(g.n, nx, ny);  // the neighbour on the sphere across the square's edge
+          if (nx < 0 || ny < 0 || nx >= g.n || ny >= g.n)
+            equal_area_wrap(g.n, nx, ny);  // the neighbour on the sphere across the square's edge
           const auto& nb = g.at(nx, ny);
           for (int k = 0; k < 3; ++k) side_sum[k] += nb[k];
         }
@@ -315,15 +321,83 @@ std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePo
 
 }  // namespace
 
+namespace {
+
+/// Pass 1: the centre of every fine texel (directions, radiance and the point-independent densities
+/// from the per-map TexelCentres), in bands of `band` rows. With an oracle whose cells are `band` rows
+/// of the quadrature's texels (oracle >= 0), its texel distributions are built from the band's own
+/// BSDF values before its density is looked up: one evaluation of the material per texel, not two.
+struct FirstPass {
+  const PointEvaluator& point;
+  const std::vector<LightSampler>& samplers;
+  const AnalyzerOptions& options;
+  const std::vector<int>& distribution;
+  int n, oracle, band;
+
+  void run(PassScratch& scratch, Sums& s, PointAnalysis* r) const {
+    const double texel_area = 4.0 * kPi / (double(n) * n);
+    const TexelSplits splits = texel_splits(n, options.exact_levels);
+    const std::size_t un = static_cast<std::size_t>(n), size = static_cast<std::size_t>(band) * un;
+    if (oracle >= 0 && (n % band != 0 || !samplers[static_cast<std::size_t>(oracle)].oracle_sampler()))
+      throw Error("analyzer: the oracle's cells are not the quadrature's texels");
+    scratch.values.resize(size);
+    scratch.counts.resize(size);
+    if (oracle >= 0) scratch.bsdf.resize(size);
+    for (int y0 = 0; y0 < n; y0 += band) {
+      const int rows = std::min(band, n - y0);
+      const std::size_t first = static_cast<std::size_t>(y0) * un, count = static_cast<std::size_t>(rows) * un;
+      for (std::size_t j = 0; j < count; ++j)
+        scratch.counts[j] = point.eval_centre(first + j, &scratch.values[j], oracle >= 0 ? &scratch.bsdf[j] : nullptr);
+      if (oracle >= 0) oracle_densities(scratch, y0, rows);
+      for (std::size_t j = 0; j < count; ++j) {
+        if (!scratch.counts[j]) continue;
+        const DirectionValues& v = scratch.values[j];
+        const int x = static_cast<int>(j % un), y = y0 + static_cast<int>(j / un);
+        const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
+        ++r->evaluations;
+        accumulate(v, q, options, distribution, s, {&splits, x, y});
+        const float fa = v.f.average();
+        scratch.grid[first + j] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                                   v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+      }
+    }
+  }
+
+  // The oracle's cells in the band get their texel distributions from the band's BSDF values, then
+  // every counted texel its density.
+  void oracle_densities(PassScratch& scratch, int y0, int rows) const {
+    const OracleSampler* o = samplers[static_cast<std::size_t>(oracle)].oracle_sampler();
+    const std::size_t un = static_cast<std::size_t>(n), F = static_cast<std::size_t>(band), cells = un / F;
+    const std::size_t row = static_cast<std::size_t>(y0) / F;  // the band's row of cells (rows == band)
+    scratch.cell.resize(F * F);
+    for (std::size_t cx = 0; cx < cells; ++cx) {
+      for (std::size_t y = 0; y < F; ++y)
+        std::copy_n(scratch.bsdf.begin() + static_cast<std::ptrdiff_t>(y * un + cx * F), F,
+                    scratch.cell.begin() + static_cast<std::ptrdiff_t>(y * F));
+      o->build_texels(static_cast<int>(row * cells + cx), scratch.cell.data());
+    }
+    for (std::size_t j = 0; j < static_cast<std::size_t>(rows) * un; ++j)
+      if (scratch.counts[j]) {
+        const std::size_t x = j % un, y = j / un;
+        scratch.values[j].p_light[static_cast<std::size_t>(oracle)] =
+            o->texel_pdf(static_cast<int>(row * cells + x / F), static_cast<int>(x % F), static_cast<int>(y));
+      }
+  }
+};
+
+}  // namespace
+
 std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint64_t jitter) const {
   SurfaceHit hit;
   if (!scene_.intersect(camera_ray, &hit) || hit.material < 0) return std::nullopt;
-  // The thread's samplers, swapped out while in use (as the grid below): safe even if a nested
+  // The thread's samplers and first-pass memory, taken out while in use: safe even if a nested
   // parallel loop ran another point on this thread.
   std::vector<LightSampler> samplers;
   samplers.swap(sampler_scratch_.local());
+  std::unique_ptr<PassScratch> scratch = std::move(pass_scratch_.local());
+  if (!scratch) scratch = std::make_unique<PassScratch>();
   const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, *centres_, jitter,
-                             samplers);
+                             samplers, oracle_rows_ > 0 ? oracle_ : -1);
   const int n = grid_resolution();
   const double texel_area = 4.0 * kPi / (double(n) * n);
   Sums s;
@@ -331,26 +405,14 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   for (int t : options_.exact_levels) s.exact.emplace_back(static_cast<std::size_t>(t) * t, std::array<double, 4>{});
   PointAnalysis r;
 
-  // Pass 1: the centre of every fine texel (directions, radiance and the point-independent densities
-  // from the per-map TexelCentres). The grid's memory is the thread's, reused from point to point.
   TexelGrid grid;
   grid.n = n;
-  std::vector<std::array<float, 3>>& scratch = grid_scratch_.local();
-  grid.q.swap(scratch);
-  grid.q.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
-  const TexelSplits splits = texel_splits(n, options_.exact_levels);
+  scratch->grid.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
+  const FirstPass pass{point, samplers, options_, distribution_, n, oracle_rows_ > 0 ? oracle_ : -1,
+                       oracle_rows_ > 0 ? oracle_rows_ : 8};
+  pass.run(*scratch, s, &r);
+  grid.q.swap(scratch->grid);
   DirectionValues v;
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * n + x;
-      if (!point.eval_centre(i, &v)) continue;
-      const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
-      ++r.evaluations;
-      accumulate(v, q, options_, distribution_, s, {&splits, x, y});
-      const float fa = v.f.average();
-      grid.q[i] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
-                   v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
-    }
 
   // Pass 2: the texels whose midpoint is not good enough, on a refine x refine grid each, and again
   // refine times finer while that changes the texel's watched integrals by more than
@@ -383,7 +445,8 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
       }
     }
   }
-  grid.q.swap(scratch);
+  grid.q.swap(scratch->grid);
+  pass_scratch_.local() = std::move(scratch);
   samplers.swap(sampler_scratch_.local());
   if (!finish(s, options_, distribution_, cell_mass_, &r)) return std::nullopt;
   return r;
@@ -438,6 +501,12 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
       throw Error("analyzer: exact level " + std::to_string(t) + " is finer than the table's fine grid (" +
                   std::to_string(n) + ")");
   centres_ = std::make_unique<TexelCentres>(env, n, tables_);
+  for (std::size_t k = 0; k < tables_.size(); ++k)
+    if (tables_[k].strategy == Strategy::Oracle) {
+      oracle_ = static_cast<int>(k);
+      const ImportanceTable& t = *tables_[k].table;  // its cells' texels are the quadrature's
+      if (t.fine_resolution() == n && t.fine_texels() == FineTexels::EqualArea) oracle_rows_ = t.cell_resolution();
+    }
   build_cell_masses();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

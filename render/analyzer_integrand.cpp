@@ -41,7 +41,7 @@ TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<
 
 PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
                                const std::vector<StrategyTables>& tables, const TexelCentres& centres,
-                               std::uint64_t jitter, std::vector<LightSampler>& samplers)
+                               std::uint64_t jitter, std::vector<LightSampler>& samplers, int deferred)
     : scene_(scene),
       env_(scene.environment()),
       centres_(centres),
@@ -52,7 +52,8 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
       frame_(sn_.ns),
       wo_l_(frame_.to_local(wo)),
       visibility_(visibility),
-      samplers_(samplers) {
+      samplers_(samplers),
+      deferred_(deferred) {
   ShadingContext sc;
   sc.n = sn_.ns;
   sc.wo = wo;
@@ -75,13 +76,17 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
 // The direction's values; the radiance and the point-independent densities come from the callables
 // (the map and the samplers at an arbitrary point, the per-map arrays at a texel centre).
 template <class Radiance, class FixedPdf>
-bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const {
+bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out,
+                          OracleSampler::TexelBsdf* bsdf, int deferred) const {
   const Vec3 wl = frame_.to_local(d);
+  if (bsdf) *bsdf = {Rgb{}, 0.0f, wl.z, false};
   if (!direction_counts(d, wl.z, sn_, mat_.transmissive)) return false;
   // The inside of a closed surface never sees the environment (Material::set_closed_surface).
   if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
   float p_bsdf;
-  const Rgb fb = hm_.bsdf->eval_pdf(wo_l_, wl, &p_bsdf) * std::fabs(wl.z);
+  const Rgb fr = hm_.bsdf->eval_pdf(wo_l_, wl, &p_bsdf);
+  if (bsdf) *bsdf = {fr, p_bsdf, wl.z, true};
+  const Rgb fb = fr * std::fabs(wl.z);
   if (is_black(fb)) return false;
   const Rgb f = fb * radiance();
   if (is_black(f) || !is_finite(f)) return false;
@@ -89,7 +94,8 @@ bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pd
   out->f_blind = f.average();
   if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
   out->p_bsdf = p_bsdf;
-  for (std::size_t k = 0; k < samplers_.size(); ++k) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf_square(p);
+  for (std::size_t k = 0; k < samplers_.size(); ++k)
+    if (static_cast<int>(k) != deferred) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf_square(p);
   return true;
 }
 
@@ -100,12 +106,12 @@ bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
   return eval(d, p, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf_square(p); }, out);
 }
 
-bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out) const {
+bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out, OracleSampler::TexelBsdf* bsdf) const {
   const int n = centres_.n;
   const Point2 p{TexelCentres::centre(static_cast<int>(i % std::size_t(n)), n),
                  TexelCentres::centre(static_cast<int>(i / std::size_t(n)), n)};
   return eval(centres_.direction[i], p, [&] { return centres_.radiance[i]; },
-              [&](std::size_t k) { return centres_.pdf[k][i]; }, out);
+              [&](std::size_t k) { return centres_.pdf[k][i]; }, out, bsdf, deferred_);
 }
 
 }  // namespace envpis::render::analyzer_detail

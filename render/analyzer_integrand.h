@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "render/integrator.h"
+#include "render/oracle.h"
 #include "render/scene.h"
 #include "render/strategy.h"
 
@@ -45,23 +46,37 @@ struct TexelCentres {
   static float centre(int x, int n) { return (float(x) + 0.5f) / float(n); }
 };
 
+/// What one thread's first pass keeps from point to point: the grid of watched values and a band of
+/// rows (render/analyzer.cpp).
+struct PassScratch {
+  std::vector<std::array<float, 3>> grid;
+  std::vector<DirectionValues> values;
+  std::vector<char> counts;  // per texel of the band: whether f is not 0 there
+  std::vector<OracleSampler::TexelBsdf> bsdf, cell;
+};
+
 /// Everything about one shading point that the quadrature evaluates.
 class PointEvaluator {
  public:
+  /// `deferred` (-1: none): a distribution whose density eval_centre() leaves to the caller (pdf_square).
   PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 wo, bool visibility,
                  const std::vector<StrategyTables>& tables, const TexelCentres& centres, std::uint64_t jitter,
-                 std::vector<LightSampler>& samplers);
+                 std::vector<LightSampler>& samplers, int deferred = -1);
   PointEvaluator(const PointEvaluator&) = delete;
   PointEvaluator& operator=(const PointEvaluator&) = delete;
 
   /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
   bool eval(Point2 p, DirectionValues* out) const;
-  /// The same at the centre of fine texel i (y * n + x), from the per-map values.
-  bool eval_centre(std::size_t i, DirectionValues* out) const;
+  /// The same at the centre of fine texel i (y * n + x), from the per-map values, but for the deferred
+  /// distribution's density. `bsdf` (may be null) receives the material's value there when evaluated.
+  bool eval_centre(std::size_t i, DirectionValues* out, OracleSampler::TexelBsdf* bsdf = nullptr) const;
+  /// Distribution k's density at equal-area point p.
+  float pdf_square(std::size_t k, Point2 p) const { return samplers_[k].pdf_square(p); }
 
  private:
   template <class Radiance, class FixedPdf>
-  bool eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out) const;
+  bool eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out,
+            OracleSampler::TexelBsdf* bsdf = nullptr, int deferred = -1) const;
 
   const Scene& scene_;
   const EnvironmentMap& env_;
@@ -76,6 +91,7 @@ class PointEvaluator {
   bool visibility_;
   std::vector<LightSampler>& samplers_;  // the thread's, one per table (built at its first point)
   std::array<bool, kMaxDistributions> fixed_{};  // per distribution: its density is in centres_.pdf
+  int deferred_;
 };
 
 }  // namespace envpis::render::analyzer_detail

@@ -254,7 +254,7 @@ void OracleSampler::prepare(const ShadingContext& sc) {
 
 // The weights of cell c's texels: each texel's share density of g at its centre (the texel's mean
 // radiance), compensated for MIS as the cells are, mixed with the table's importance inside the cell.
-void OracleSampler::texel_weights(int c, float* out) const {
+void OracleSampler::texel_weights(int c, float* out, const TexelBsdf* given) const {
   const ImportanceTable& t = cells_->table();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
   const int x0 = (c % T) * F, y0 = (c / T) * F;
@@ -265,14 +265,18 @@ void OracleSampler::texel_weights(int c, float* out) const {
   double w_sum = 0, q_sum = 0;
   for (int y = 0; y < F; ++y)
     for (int x = 0; x < F; ++x) {
-      const Vec3 wl = sc_.frame->to_local(
-          equal_area_square_to_sphere({(float(x0 + x) + 0.5f) * inv_n, (float(y0 + y) + 0.5f) * inv_n}));
+      TexelBsdf b = given ? given[y * F + x] : TexelBsdf{};
+      if (!b.known && (!given || !skip_below || b.cos > 0)) {
+        const Vec3 wl = sc_.frame->to_local(
+            equal_area_square_to_sphere({(float(x0 + x) + 0.5f) * inv_n, (float(y0 + y) + 0.5f) * inv_n}));
+        b.cos = wl.z;
+        if (!skip_below || wl.z > 0)
+          b.f = compensate ? sc_.bsdf->eval_pdf(sc_.wo_local, wl, &b.pdf) : sc_.bsdf->eval(sc_.wo_local, wl);
+      }
       double w = 0;
-      if (!skip_below || wl.z > 0) {
-        float pb = 0;
-        const Rgb f = compensate ? sc_.bsdf->eval_pdf(sc_.wo_local, wl, &pb) : sc_.bsdf->eval(sc_.wo_local, wl);
-        const double g = double((f * cells_->radiance(c, x, y)).average()) * std::fabs(wl.z) * inv_total;
-        w = compensate ? compensated(g, double(pb)) : g;
+      if (!skip_below || b.cos > 0) {
+        const double g = double((b.f * cells_->radiance(c, x, y)).average()) * std::fabs(b.cos) * inv_total;
+        w = compensate ? compensated(g, double(b.pdf)) : g;
         if (!(w > 0) || !std::isfinite(w)) w = 0;
       }
       out[y * F + x] = static_cast<float>(w);
@@ -286,17 +290,21 @@ void OracleSampler::texel_weights(int c, float* out) const {
       out[y * F + x] = static_cast<float>(a * double(out[y * F + x]) + b * double(t.importance(x0 + x, y0 + y)));
 }
 
-const DiscreteDistribution2D& OracleSampler::texels(int c) const {
+const DiscreteDistribution2D& OracleSampler::texels(int c, const TexelBsdf* given) const {
   int& slot = slot_[static_cast<std::size_t>(c)];
   if (slot < 0) {
     slot = static_cast<int>(built_.size());
     built_.push_back(c);
     const int F = cells_->table().cell_resolution();
     if (pool_.size() <= static_cast<std::size_t>(slot)) pool_.emplace_back(F, F);
-    texel_weights(c, pool_[static_cast<std::size_t>(slot)].values());
+    texel_weights(c, pool_[static_cast<std::size_t>(slot)].values(), given);
     pool_[static_cast<std::size_t>(slot)].update();
   }
   return pool_[static_cast<std::size_t>(slot)];
+}
+
+void OracleSampler::build_texels(int c, const TexelBsdf* given) const {
+  if (valid_ && c >= 0 && c < top_.width() * top_.height() && top_.pmf(c) > 0) texels(c, given);
 }
 
 DirectionSample OracleSampler::sample(Point2 u) const {
@@ -322,18 +330,24 @@ float OracleSampler::pdf(Vec3 wi) const {
   return pdf_square(equal_area_sphere_to_square(wi));
 }
 
+float OracleSampler::texel_pdf(int c, int x, int y) const {
+  const float pc = valid_ ? top_.pmf(c) : 0.0f;
+  if (!(pc > 0)) return 0.0f;
+  const DiscreteDistribution2D& d = texels(c);
+  if (!d.valid()) return 0.0f;
+  const ImportanceTable& t = cells_->table();
+  const int F = t.cell_resolution();
+  return t.solid_angle_pdf(pc, d.pmf(x, y) * float(F) * float(F));
+}
+
 float OracleSampler::pdf_square(Point2 p) const {
   if (!valid_ || !in_unit_square(p)) return 0.0f;
   const ImportanceTable& t = cells_->table();
   const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
   const int c = t.cell_of(p);
-  const float pc = top_.pmf(c);
-  if (!(pc > 0)) return 0.0f;
-  const DiscreteDistribution2D& d = texels(c);
-  if (!d.valid()) return 0.0f;
   const int x = std::clamp(static_cast<int>(p.x * float(N)) - (c % T) * F, 0, F - 1);
   const int y = std::clamp(static_cast<int>(p.y * float(N)) - (c / T) * F, 0, F - 1);
-  return t.solid_angle_pdf(pc, d.pmf(x, y) * float(F) * float(F));
+  return texel_pdf(c, x, y);
 }
 
 }  // namespace envpis::render

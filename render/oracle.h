@@ -88,6 +88,21 @@ class OracleSampler {
   /// The prepared top level (for tests): cell weights, or invalid when no cell has any.
   const DiscreteDistribution2D& top() const { return top_; }
 
+  /// The material at a texel's centre, as the caller (the analyzer's quadrature, which evaluates the
+  /// same directions) found it: the local cosine there, and where `known`, f = eval (no cosine) and
+  /// its pdf; elsewhere the oracle evaluates them itself, if it needs them.
+  struct TexelBsdf {
+    Rgb f;
+    float pdf = 0, cos = 0;
+    bool known = false;
+  };
+  /// Builds cell c's texel distribution now, as the first sample() or pdf() in the cell would, from
+  /// `given` (the cell's F x F texel centres, row-major) where known: the same values give the same
+  /// distribution. No-op when the cell is built since prepare() or has no weight.
+  void build_texels(int c, const TexelBsdf* given) const;
+  /// pdf() in texel (x, y) of cell c (0 <= x, y < F): pdf_square() of a point in that texel.
+  float texel_pdf(int c, int x, int y) const;
+
  private:
   struct Point {
     int cell;
@@ -111,8 +126,10 @@ class OracleSampler {
   void evaluate_draws(const ShadingContext& sc);  // every draw into points_
   Point evaluate(const ShadingContext& sc, Point2 p, int c, float q, Rgb radiance, bool skip_below) const;
   void estimate();  // cell_sum_ from points_ and count_
-  void texel_weights(int c, float* out) const;  // cell c's F x F texel weights
-  const DiscreteDistribution2D& texels(int c) const;  // cell c's texel distribution, built on first use
+  // Cell c's F x F texel weights, with the material's values from `given` where known (may be null).
+  void texel_weights(int c, float* out, const TexelBsdf* given) const;
+  // Cell c's texel distribution, built on first use.
+  const DiscreteDistribution2D& texels(int c, const TexelBsdf* given = nullptr) const;
 
   std::shared_ptr<const OracleCells> cells_;
   OracleOptions options_;

@@ -196,6 +196,8 @@ class LightSampler {
 
   /// Product sampler (strategy product), for tests and diagnostics.
   const ProductSampler* product_sampler() const { return product_; }
+  /// Oracle sampler (strategy oracle): the analyzer builds its texel distributions from its own BSDF values.
+  const OracleSampler* oracle_sampler() const { return oracle_.get(); }
   /// With a product cache, the shading points that reused a prepared distribution and those that
   /// did not (the cache's misses and the deeper vertices, prepared exactly); 0 without a cache.
   std::uint64_t product_cache_hits() const;

@@ -2,6 +2,8 @@
 // Tests of the oracle strategy (render/oracle.h):
 //   - its pdf is the density of its samples (chi-square, tests/chi2.h) for a sharp and a medium glossy
 //     lobe, a diffuse surface and a closed glass sphere under a small bright sun;
+//   - a cell's texel distribution built from a caller's BSDF values (the analyzer's) is the one it
+//     builds itself;
 //   - it is a limit: by the analyzer (exact, no noise), the renderer's estimator with the oracle has
 //     no more variance than with the product sampler at every tested shading point of spheres under
 //     that sun (GGX alpha 0.02, 0.1 and 0.3, Lambert, glass).
@@ -119,6 +121,52 @@ TEST(Oracle, PdfSquareIsThePdfOfItsDirection) {
       }
     EXPECT_GT(positive, 100);  // not a comparison of zeros (mis-comp's is 0 on most of the sphere)
     EXPECT_EQ(light.pdf_square({std::nanf(""), 0.5f}), 0.0f);
+  }
+}
+
+// OracleSampler::build_texels: a cell's texel distribution from the caller's BSDF values at its texel
+// centres (here half of them; the oracle evaluates the others) gives the same density, bit for bit, as
+// the one the oracle builds itself, in every cell, for each material. Values scaled by 2 must change it.
+TEST(Oracle, TexelsFromGivenValuesAreItsOwn) {
+  const StrategyTables tables = StrategyTables::build(*sun_sky(), Strategy::Oracle);
+  const ImportanceTable& t = *tables.table;
+  const int T = t.top_resolution(), F = t.cell_resolution(), N = t.fine_resolution();
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    const Material m = single(c.lobe, c.transmissive);
+    const Frame frame(normalize(Vec3{0.1f, -0.9f, 0.35f}));
+    const ShadingContext sc = shading_point(frame, m, c.transmissive);
+    for (float scale : {1.0f, 2.0f}) {
+      LightSampler own(tables), given(tables);
+      own.prepare(sc);
+      given.prepare(sc);
+      std::vector<OracleSampler::TexelBsdf> values(static_cast<std::size_t>(F) * F);
+      for (int cell = 0; cell < T * T; ++cell) {
+        for (int y = 0; y < F; ++y)
+          for (int x = 0; x < F; ++x) {
+            const float inv_n = 1.0f / float(N);  // the oracle's own arithmetic, so the same bits
+            const Point2 p{(float((cell % T) * F + x) + 0.5f) * inv_n, (float((cell / T) * F + y) + 0.5f) * inv_n};
+            const Vec3 wl = frame.to_local(equal_area_square_to_sphere(p));
+            OracleSampler::TexelBsdf& v = values[static_cast<std::size_t>(y) * F + x];
+            v.cos = wl.z;
+            v.known = (x + y) % 2 == 0;  // the others: the cosine only, as the analyzer below the horizon
+            if (v.known) v.f = m.eval_pdf(sc.wo_local, wl, &v.pdf) * scale;
+          }
+        given.oracle_sampler()->build_texels(cell, values.data());
+      }
+      int differ = 0, positive = 0;
+      for (int y = 0; y < N; ++y)
+        for (int x = 0; x < N; ++x) {
+          const Point2 p{(float(x) + 0.5f) / float(N), (float(y) + 0.5f) / float(N)};
+          const float a = own.pdf_square(p), b = given.pdf_square(p);
+          ASSERT_EQ(b, given.oracle_sampler()->texel_pdf((y / F) * T + x / F, x % F, y % F));
+          differ += a != b;
+          positive += a > 0;
+        }
+      EXPECT_GT(positive, N * N / 4);
+      if (scale == 1.0f) EXPECT_EQ(differ, 0);
+      else EXPECT_GT(differ, 0);
+    }
   }
 }
 
