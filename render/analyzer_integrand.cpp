@@ -51,6 +51,7 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
       sn_(shading_normals(hit_, mat_.transmissive, wo)),
       frame_(sn_.ns),
       wo_l_(frame_.to_local(wo)),
+      choice_(hm_.bsdf->choice(wo_l_)),
       visibility_(visibility),
       samplers_(samplers),
       deferred_(deferred) {
@@ -73,10 +74,10 @@ PointEvaluator::PointEvaluator(const Scene& scene, const SurfaceHit& hit, Vec3 w
   }
 }
 
-// The direction's values; the radiance and the point-independent densities come from the callables
-// (the map and the samplers at an arbitrary point, the per-map arrays at a texel centre).
-template <class Radiance, class FixedPdf>
-bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out,
+// The direction's values; the radiance and the densities come from the callables (the map and the
+// samplers at an arbitrary point; the per-map arrays and the samplers' texel densities at a centre).
+template <class Radiance, class Density>
+bool PointEvaluator::eval(Vec3 d, Radiance radiance, Density density, DirectionValues* out,
                           OracleSampler::TexelBsdf* bsdf, int deferred) const {
   const Vec3 wl = frame_.to_local(d);
   if (bsdf) *bsdf = {Rgb{}, 0.0f, wl.z, false};
@@ -84,7 +85,7 @@ bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pd
   // The inside of a closed surface never sees the environment (Material::set_closed_surface).
   if (hm_.bsdf->closed_surface() && wl.z < 0) return false;
   float p_bsdf;
-  const Rgb fr = hm_.bsdf->eval_pdf(wo_l_, wl, &p_bsdf);
+  const Rgb fr = hm_.bsdf->eval_pdf(wo_l_, wl, &p_bsdf, choice_);
   if (bsdf) *bsdf = {fr, p_bsdf, wl.z, true};
   const Rgb fb = fr * std::fabs(wl.z);
   if (is_black(fb)) return false;
@@ -95,7 +96,7 @@ bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pd
   if (visibility_ && scene_.occluded(offset_ray_origin(hit_.p, hit_.ng, d), d)) out->f = Rgb{0, 0, 0};
   out->p_bsdf = p_bsdf;
   for (std::size_t k = 0; k < samplers_.size(); ++k)
-    if (static_cast<int>(k) != deferred) out->p_light[k] = fixed_[k] ? fixed_pdf(k) : samplers_[k].pdf_square(p);
+    if (static_cast<int>(k) != deferred) out->p_light[k] = density(k);
   return true;
 }
 
@@ -103,15 +104,15 @@ bool PointEvaluator::eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pd
 // not by mapping its direction back to the square: the point's texel is the one the quadrature means.
 bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
   const Vec3 d = equal_area_square_to_sphere(p);
-  return eval(d, p, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf_square(p); }, out);
+  return eval(d, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf_square(p); }, out);
 }
 
 bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out, OracleSampler::TexelBsdf* bsdf) const {
-  const int n = centres_.n;
-  const Point2 p{TexelCentres::centre(static_cast<int>(i % std::size_t(n)), n),
-                 TexelCentres::centre(static_cast<int>(i / std::size_t(n)), n)};
-  return eval(centres_.direction[i], p, [&] { return centres_.radiance[i]; },
-              [&](std::size_t k) { return centres_.pdf[k][i]; }, out, bsdf, deferred_);
+  const int n = centres_.n, x = static_cast<int>(i % std::size_t(n)), y = static_cast<int>(i / std::size_t(n));
+  return eval(
+      centres_.direction[i], [&] { return centres_.radiance[i]; },
+      [&](std::size_t k) { return fixed_[k] ? centres_.pdf[k][i] : samplers_[k].pdf_texel(x, y, n); }, out, bsdf,
+      deferred_);
 }
 
 }  // namespace envpis::render::analyzer_detail

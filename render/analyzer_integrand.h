@@ -43,7 +43,7 @@ struct TexelCentres {
 
   TexelCentres(const EnvironmentMap& env, int n, const std::vector<StrategyTables>& tables);
   /// The equal-area coordinate of the centre of texel x (or row y) of n.
-  static float centre(int x, int n) { return (float(x) + 0.5f) / float(n); }
+  static float centre(int x, int n) { return texel_centre(x, 0, n).x; }
 };
 
 /// What one thread's first pass keeps from point to point: the grid of watched values and a band of
@@ -74,8 +74,8 @@ class PointEvaluator {
   float pdf_square(std::size_t k, Point2 p) const { return samplers_[k].pdf_square(p); }
 
  private:
-  template <class Radiance, class FixedPdf>
-  bool eval(Vec3 d, Point2 p, Radiance radiance, FixedPdf fixed_pdf, DirectionValues* out,
+  template <class Radiance, class Density>
+  bool eval(Vec3 d, Radiance radiance, Density density, DirectionValues* out,
             OracleSampler::TexelBsdf* bsdf = nullptr, int deferred = -1) const;
 
   const Scene& scene_;
@@ -88,6 +88,7 @@ class PointEvaluator {
   ShadingNormals sn_;
   Frame frame_;
   Vec3 wo_l_;
+  Material::Choice choice_;  // the material's lobe choice at wo_l_
   bool visibility_;
   std::vector<LightSampler>& samplers_;  // the thread's, one per table (built at its first point)
   std::array<bool, kMaxDistributions> fixed_{};  // per distribution: its density is in centres_.pdf

@@ -91,6 +91,19 @@ class Material {
   float pdf(Vec3 wo, Vec3 wi) const;
   /// eval() and pdf() together, the same values (*pdf receives pdf()), through Lobe::eval_pdf.
   Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const;
+  /// The lobe choice at outgoing direction wo (each lobe's probability), which eval_pdf() computes at
+  /// every call: for a caller that evaluates many directions at one wo (the analyzer's quadrature).
+  class Choice {
+    friend class Material;
+    const Material* material_ = nullptr;  // the material and wo it was made for
+    Vec3 wo_;
+    std::vector<float> probability_;
+    bool usable_ = false;  // wo is a direction the lobes can take
+  };
+  Choice choice(Vec3 wo) const;
+  /// eval_pdf() with the lobe choice given; the same values (a choice made by another material or at
+  /// another wo is not used).
+  Rgb eval_pdf(Vec3 wo, Vec3 wi, float* pdf, const Choice& choice) const;
   std::optional<BsdfSample> sample(Vec3 wo, Point2 u, float uc) const;
   /// Fills the proxy for outgoing direction wo (local frame). The caller calls
   /// ProductSampler::prepare(normal, wo_world, proxy) with the same normal the frame uses.
@@ -125,6 +138,8 @@ class Material {
     Rgb weight;
     float weight_average;  ///< for the lobe choice and the proxy
   };
+  template <class Probability>
+  Rgb eval_pdf_lobes(Vec3 wo, Vec3 wi, float* pdf, Probability probability) const;
   std::vector<Entry> lobes_;
   std::string name_;
   bool closed_surface_ = false;

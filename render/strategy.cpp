@@ -329,6 +329,25 @@ float LightSampler::pdf(Vec3 wi, Point2 texture) const {
   return 0;
 }
 
+float LightSampler::pdf_texel(int x, int y, int n) const {
+  auto on_grid = [n](const ImportanceTable* t) {
+    return t && t->fine_texels() == FineTexels::EqualArea && t->fine_resolution() == n;
+  };
+  switch (strategy_) {
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::MisComp:
+      if (on_grid(table_)) return table_->pdf_texel(x, y);
+      break;
+    case Strategy::Product:
+      if (product_ && on_grid(&product_->table())) return product_->pdf_texel(x, y);
+      if (!product_ && on_grid(elsewhere_)) return elsewhere_->pdf_texel(x, y);
+      break;
+    default: break;
+  }
+  return pdf_square(texel_centre(x, y, n));
+}
+
 float LightSampler::pdf_square(Point2 p) const {
   switch (strategy_) {
     case Strategy::Bsdf: return 0;

@@ -193,6 +193,9 @@ class LightSampler {
   /// pdf() at the direction of equal-area point p, given p (ImportanceTable::pdf_square): for a
   /// quadrature over the square's texels.
   float pdf_square(Point2 p) const;
+  /// pdf_square() at the centre of texel (x, y) of an n x n grid over the equal-area square; where the
+  /// strategy's table has that grid, without locating the point (ImportanceTable::pdf_texel).
+  float pdf_texel(int x, int y, int n) const;
 
   /// Product sampler (strategy product), for tests and diagnostics.
   const ProductSampler* product_sampler() const { return product_; }

@@ -320,6 +320,13 @@ ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
   return at;
 }
 
+ImportanceTable::Located ImportanceTable::locate_texel(int x, int y) const {
+  const int TS = T_ * S_, F = fine_->per_cell(), lx = x / F, ly = y / F;
+  Located at{0, 0, ly * TS + lx, x - lx * F, y - ly * F};
+  cell_and_sub(at.leaf, at.cell, at.sub);
+  return at;
+}
+
 int ImportanceTable::cell_of(Point2 p) const {
   if (!map_texels_) return locate(p).cell;
   int c, sub;
@@ -454,7 +461,15 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 tex
 float ImportanceTable::pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !in_unit_square(p)) return 0.0f;
   if (map_texels_) return pdf(top, square_to_sphere(p), sub);  // the map's texels are not the square's
-  const Located at = locate(p);
+  return pdf_located(top, locate(p), sub);
+}
+
+float ImportanceTable::pdf_texel(const DiscreteDistribution2D& top, int x, int y, const SubcellLevel* sub) const {
+  if (empty_ || !top.valid() || map_texels_ || x < 0 || y < 0 || x >= N_ || y >= N_) return 0.0f;
+  return pdf_located(top, locate_texel(x, y), sub);
+}
+
+float ImportanceTable::pdf_located(const DiscreteDistribution2D& top, const Located& at, const SubcellLevel* sub) const {
   const float cell_pmf = top.pmf(at.cell);
   if (!(cell_pmf > 0)) return 0.0f;
   const float sub_pmf = S_ > 1 ? (sub ? sub->subcells(at.cell) : env_sub_[at.cell]).pmf(at.sub) : 1.0f;

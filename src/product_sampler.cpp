@@ -228,6 +228,8 @@ float ProductSampler::pdf(Vec3 wi, Point2 texture) const { return valid_ ? table
 
 float ProductSampler::pdf_square(Point2 p) const { return valid_ ? table_->pdf_square(top_, p, this) : 0.0f; }
 
+float ProductSampler::pdf_texel(int x, int y) const { return valid_ ? table_->pdf_texel(top_, x, y, this) : 0.0f; }
+
 Point2 ProductSampler::invert(Vec3 wi) const { return valid_ ? table_->invert(top_, wi, this) : Point2{0.5f, 0.5f}; }
 
 }  // namespace envpis

@@ -554,7 +554,8 @@ TEST(ProductSampler, RefinedSamplePdfAgreeAndInvertRoundTrips) {
 
 // pdf_square(p) is pdf() of p's direction: the same bits wherever the round trip square -> sphere ->
 // square stays in p's texel (every point kept 1e-3 of a texel from its edges), for the table and the
-// product sampler, and on a table with the map's own texels; 0 outside the square or at NaN.
+// product sampler, and on a table with the map's own texels; 0 outside the square or at NaN. On the
+// equal-area tables pdf_texel, the density of a texel given by its index, is pdf_square of its points.
 TEST(ProductSampler, PdfSquareIsThePdfOfItsDirection) {
   std::mt19937_64 rng(47);
   std::uniform_real_distribution<float> U(0, 1);
@@ -578,6 +579,11 @@ TEST(ProductSampler, PdfSquareIsThePdfOfItsDirection) {
         const Vec3 d = equal_area_square_to_sphere(p);
         ASSERT_EQ(ps.pdf_square(p), ps.pdf(d)) << name << " " << c.label << " at " << p.x << ", " << p.y;
         ASSERT_EQ(table->pdf_square(p), table->pdf(d)) << name << " at " << p.x << ", " << p.y;
+        if (table->fine_texels() == FineTexels::EqualArea) {  // the texel's density, located by its index
+          const int x = static_cast<int>(p.x * n), y = static_cast<int>(p.y * n);
+          ASSERT_EQ(ps.pdf_texel(x, y), ps.pdf_square(p)) << name << " " << c.label << " texel " << x << ", " << y;
+          ASSERT_EQ(table->pdf_texel(x, y), table->pdf_square(p)) << name << " texel " << x << ", " << y;
+        }
         positive += ps.pdf_square(p) > 0;
       }
       EXPECT_GT(positive, 1000) << name << " " << c.label;  // not a comparison of zeros
@@ -585,6 +591,10 @@ TEST(ProductSampler, PdfSquareIsThePdfOfItsDirection) {
     for (const Point2 bad : {Point2{-0.1f, 0.5f}, Point2{0.5f, 1.5f}, Point2{std::nanf(""), 0.5f}}) {
       EXPECT_EQ(ps.pdf_square(bad), 0.0f) << name;
       EXPECT_EQ(table->pdf_square(bad), 0.0f) << name;
+    }
+    for (const auto& [x, y] : {std::pair{-1, 0}, std::pair{0, table->fine_resolution()}}) {
+      EXPECT_EQ(ps.pdf_texel(x, y), 0.0f) << name;
+      EXPECT_EQ(table->pdf_texel(x, y), 0.0f) << name;
     }
   }
 }

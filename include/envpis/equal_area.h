@@ -25,6 +25,9 @@ constexpr float kEqualAreaPdf = kInv4Pi;
 /// Whether p lies in the closed square [0,1]^2 (false for NaN): a point whose density is defined.
 inline bool in_unit_square(Point2 p) { return p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1; }
 
+/// The centre of texel (x, y) of an n x n grid over the square.
+inline Point2 texel_centre(int x, int y, int n) { return {(float(x) + 0.5f) / float(n), (float(y) + 0.5f) / float(n)}; }
+
 /// Square [0,1]^2 -> unit direction. Inputs outside [0,1] are clamped.
 Vec3 equal_area_square_to_sphere(Point2 p);
 

@@ -166,6 +166,8 @@ class ImportanceTable {
   /// locates p itself instead of mapping d back to the square (the same value but within round-off of
   /// a texel's edge). For callers that walk the square, as a quadrature over its texels does.
   float pdf_square(Point2 p) const { return pdf_square(top_, p); }
+  /// pdf_square() anywhere in fine texel (x, y) (see pdf_texel(top, x, y)).
+  float pdf_texel(int x, int y) const { return pdf_texel(top_, x, y); }
   /// The u that sample() maps to direction d (up to round-off), e.g. to test stratification.
   Point2 invert(Vec3 d) const { return invert(top_, d); }
 
@@ -181,6 +183,10 @@ class ImportanceTable {
   float pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 texture, const SubcellLevel* sub = nullptr) const;
   /// The same at the direction of equal-area point p (see pdf_square(p)).
   float pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub = nullptr) const;
+  /// pdf_square() anywhere in fine texel (x, y) of the equal-area grid (0 <= x, y < fine_resolution()),
+  /// where the density is constant, without locating a point: for a quadrature over the texels.
+  /// 0 outside the grid and for tables with the map's own texels (FineTexels::Map).
+  float pdf_texel(const DiscreteDistribution2D& top, int x, int y, const SubcellLevel* sub = nullptr) const;
   Point2 invert(const DiscreteDistribution2D& top, Vec3 d, const SubcellLevel* sub = nullptr) const;
   /// The environment's own top level: cell (x, y) has probability E[c], c = y * T + x.
   const DiscreteDistribution2D& top_level() const { return top_; }
@@ -233,6 +239,8 @@ class ImportanceTable {
     int cell, sub, leaf, tx, ty;  // texel (tx, ty) in the fine-level cell
   };
   Located locate(Point2 p) const;
+  Located locate_texel(int x, int y) const;  // fine texel (x, y) of the equal-area grid
+  float pdf_located(const DiscreteDistribution2D& top, const Located& at, const SubcellLevel* sub) const;
 
   int T_ = 12, S_ = 1, F_ = 1, N_ = 12;
   bool empty_ = true;

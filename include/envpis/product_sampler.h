@@ -136,6 +136,8 @@ class ProductSampler : private SubcellLevel {
   float pdf(Vec3 wi, Point2 texture) const;
   /// pdf() at the direction of equal-area point p, given p (ImportanceTable::pdf_square).
   float pdf_square(Point2 p) const;
+  /// pdf() in fine texel (x, y) of the table's equal-area grid (ImportanceTable::pdf_texel).
+  float pdf_texel(int x, int y) const;
   /// The u that sample() maps to direction wi (up to round-off).
   Point2 invert(Vec3 wi) const;
 

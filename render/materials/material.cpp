@@ -89,19 +89,45 @@ float Material::pdf(Vec3 wo, Vec3 wi) const {
   return p;
 }
 
+// The lobes' sum and mixture pdf, lobe k chosen with probability(k).
+template <class Probability>
+Rgb Material::eval_pdf_lobes(Vec3 wo, Vec3 wi, float* pdf, Probability probability) const {
+  Rgb f;
+  for (std::size_t k = 0; k < lobes_.size(); ++k) {
+    float pl;
+    f = f + lobes_[k].lobe->eval_pdf(wo, wi, &pl) * lobes_[k].weight;
+    const float pk = probability(k);
+    if (pk > 0) *pdf += pk * pl;
+  }
+  return f;
+}
+
 Rgb Material::eval_pdf(Vec3 wo, Vec3 wi, float* pdf) const {
   *pdf = 0;
   if (lobes_.empty() || !microfacet::usable(wo) || !microfacet::usable(wi)) return eval(wo, wi);
   const Selection sel(lobes_, wo);
   const bool chosen = sel.total() > 0;  // else no lobe is ever sampled: pdf 0
-  Rgb f;
-  for (std::size_t k = 0; k < lobes_.size(); ++k) {
-    float pl;
-    f = f + lobes_[k].lobe->eval_pdf(wo, wi, &pl) * lobes_[k].weight;
-    const float pk = chosen ? sel.probability(k) : 0.0f;
-    if (pk > 0) *pdf += pk * pl;
-  }
-  return f;
+  return eval_pdf_lobes(wo, wi, pdf, [&](std::size_t k) { return chosen ? sel.probability(k) : 0.0f; });
+}
+
+Material::Choice Material::choice(Vec3 wo) const {
+  Choice c;
+  c.material_ = this;
+  c.wo_ = wo;
+  c.usable_ = !lobes_.empty() && microfacet::usable(wo);
+  if (!c.usable_) return c;
+  const Selection sel(lobes_, wo);
+  const bool chosen = sel.total() > 0;
+  for (std::size_t k = 0; k < lobes_.size(); ++k) c.probability_.push_back(chosen ? sel.probability(k) : 0.0f);
+  return c;
+}
+
+Rgb Material::eval_pdf(Vec3 wo, Vec3 wi, float* pdf, const Choice& choice) const {
+  const bool mine = choice.material_ == this && choice.wo_.x == wo.x && choice.wo_.y == wo.y && choice.wo_.z == wo.z;
+  if (!mine || !choice.usable_ || choice.probability_.size() != lobes_.size()) return eval_pdf(wo, wi, pdf);
+  *pdf = 0;
+  if (!microfacet::usable(wi)) return eval(wo, wi);
+  return eval_pdf_lobes(wo, wi, pdf, [&](std::size_t k) { return choice.probability_[k]; });
 }
 
 std::optional<BsdfSample> Material::sample(Vec3 wo, Point2 u, float uc) const {

@@ -2,7 +2,8 @@
 // Lobe::eval_pdf and Material::eval_pdf give exactly (bit for bit) what eval and pdf give, for every
 // lobe, over random directions on the whole sphere (below the horizon, transmission, grazing and
 // degenerate ones included), at roughness 0 (clamped), 1 and between, and for lobes a LobeFilter
-// changed: the oracle and the analyzer use the fused form and must stay the same as before it.
+// changed: the oracle and the analyzer use the fused form and must stay the same as before it. The
+// material's form with its lobe choice computed once (the analyzer's) gives the same bits.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -108,6 +109,18 @@ TEST(BsdfEvalPdf, MaterialEqualsEvalAndPdf) {
       const Rgb f = materials[m].eval_pdf(wo, wi, &p);
       expect_same(f, materials[m].eval(wo, wi), "material " + std::to_string(m));
       EXPECT_EQ(p, materials[m].pdf(wo, wi)) << "material " << m;
+      // ...also with the lobe choice at wo computed once (Material::choice), and with another
+      // material's choice or one at another wo, which must not be taken for this one's
+      float q = -1;
+      expect_same(materials[m].eval_pdf(wo, wi, &q, materials[m].choice(wo)), f, "material " + std::to_string(m));
+      EXPECT_EQ(q, p) << "material " << m << " with its choice";
+      q = -1;
+      expect_same(materials[m].eval_pdf(wo, wi, &q, materials[(m + 1) % materials.size()].choice(wo)), f,
+                  "material " + std::to_string(m));
+      EXPECT_EQ(q, p) << "material " << m << " with another's choice";
+      q = -1;
+      expect_same(materials[m].eval_pdf(wo, wi, &q, materials[m].choice(wi)), f, "material " + std::to_string(m));
+      EXPECT_EQ(q, p) << "material " << m << " with a choice at another wo";
     }
 }
 
