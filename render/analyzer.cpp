@@ -201,6 +201,7 @@ void accumulate(const DirectionValues& v, const QuadraturePoint& q, const Analyz
 struct TexelGrid {
   int n = 0;
   std::vector<std::array<float, 3>> q;
+  std::array<double, 3> total{};  // the sums of q's values, in row-major order
   const std::array<float, 3>& at(int x, int y) const { return q[static_cast<std::size_t>(y) * n + x]; }
 };
 
@@ -208,9 +209,7 @@ struct TexelGrid {
 /// the watched integrals, or whose midpoint error, estimated from the second differences to their
 /// four neighbours (h^2/24 (f_xx + f_yy) per unit area), exceeds `tolerance` of it.
 std::vector<int> texels_to_refine(const TexelGrid& g, double share, double tolerance) {
-  std::array<double, 3> total{};
-  for (const auto& q : g.q)
-    for (int k = 0; k < 3; ++k) total[k] += q[k];
+  const std::array<double, 3>& total = g.total;
   std::vector<int> out;
   for (int y = 0; y < g.n; ++y)
     for (int x = 0; x < g.n; ++x) {
@@ -334,7 +333,7 @@ struct FirstPass {
   const std::vector<int>& distribution;
   int n, oracle, band;
 
-  void run(PassScratch& scratch, Sums& s, PointAnalysis* r) const {
+  void run(PassScratch& scratch, Sums& s, PointAnalysis* r, std::array<double, 3>* total) const {
     const double texel_area = 4.0 * kPi / (double(n) * n);
     const TexelSplits splits = texel_splits(n, options.exact_levels);
     const std::size_t un = static_cast<std::size_t>(n), size = static_cast<std::size_t>(band) * un;
@@ -357,8 +356,10 @@ struct FirstPass {
         ++r->evaluations;
         accumulate(v, q, options, distribution, s, {&splits, x, y});
         const float fa = v.f.average();
-        scratch.grid[first + j] = {v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
-                                   v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+        const std::array<float, 3> watched{v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                                           v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+        scratch.grid[first + j] = watched;
+        for (int k = 0; k < 3; ++k) (*total)[k] += watched[k];  // the texels left at 0 add nothing
       }
     }
   }
@@ -410,7 +411,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   scratch->grid.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
   const FirstPass pass{point, samplers, options_, distribution_, n, oracle_rows_ > 0 ? oracle_ : -1,
                        oracle_rows_ > 0 ? oracle_rows_ : 8};
-  pass.run(*scratch, s, &r);
+  pass.run(*scratch, s, &r, &grid.total);
   grid.q.swap(scratch->grid);
   DirectionValues v;
 
@@ -419,9 +420,8 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   // kDeepTolerance x refine_tolerance of their totals (a sun's edge needs 16 x 16 points per texel).
   const int m = options_.refine;
   if (m > 1) {
-    std::array<double, 3> total{};
-    for (const auto& q : grid.q)
-      for (int k = 0; k < 3; ++k) total[k] += double(q[k]) * texel_area;
+    std::array<double, 3> total;
+    for (int k = 0; k < 3; ++k) total[k] = grid.total[k] * texel_area;
     std::vector<std::pair<DirectionValues, QuadraturePoint>> kept;
     for (int t : texels_to_refine(grid, options_.refine_share, options_.refine_tolerance)) {
       const QuadraturePoint whole{double(t % n) / n, double(t / n) / n, 1.0 / n, -texel_area};
@@ -471,21 +471,24 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
   };
   // Distribution 0 is the environment table (env, mis, and the limits' fine density); the product
   // shares it, as the renderer's product strategy does, unless over the compensated table.
-  tables_.push_back(build(Strategy::Mis));
   auto wants = [&](Strategy s) {
     return std::find(options_.strategies.begin(), options_.strategies.end(), s) != options_.strategies.end();
   };
-  if (wants(Strategy::MisComp)) tables_.push_back(build(Strategy::MisComp));
-  if (wants(Strategy::Product)) {
-    if (options_.product_compensation == ProductCompensation::On) {  // its own, compensated table
-      tables_.push_back(build(Strategy::Product));
-    } else {
-      StrategyTables t = tables_.front();
-      t.strategy = Strategy::Product;
-      tables_.push_back(std::move(t));
-    }
+  const bool own_product = wants(Strategy::Product) && options_.product_compensation == ProductCompensation::On;
+  std::vector<Strategy> built{Strategy::Mis};
+  if (wants(Strategy::MisComp)) built.push_back(Strategy::MisComp);
+  if (own_product) built.push_back(Strategy::Product);  // its own, compensated table
+  if (wants(Strategy::Oracle)) built.push_back(Strategy::Oracle);
+  tables_.resize(built.size());
+  auto build_one = [&](std::size_t i) { tables_[i] = build(built[i]); };
+  // The tables at once (each build has serial parts); a caller's source is asked in turn.
+  if (source) for (std::size_t i = 0; i < built.size(); ++i) build_one(i);
+  else tbb::parallel_for(std::size_t(0), built.size(), build_one);
+  if (wants(Strategy::Product) && !own_product) {
+    StrategyTables t = tables_.front();
+    t.strategy = Strategy::Product;
+    tables_.insert(tables_.begin() + (wants(Strategy::MisComp) ? 2 : 1), std::move(t));
   }
-  if (wants(Strategy::Oracle)) tables_.push_back(build(Strategy::Oracle));
   for (Strategy s : options_.strategies) {
     int k = -1;
     if (s != Strategy::Bsdf) {

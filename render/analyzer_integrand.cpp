@@ -33,7 +33,7 @@ TexelCentres::TexelCentres(const EnvironmentMap& env, int n_, const std::vector<
         radiance[i] = env.eval(d);
         std::size_t s = 0;
         for (auto& p : pdf)
-          if (!p.empty()) p[i] = samplers[s++].pdf_square({u[x], v[x]});
+          if (!p.empty()) p[i] = samplers[s++].pdf_texel(static_cast<int>(x), y, n);
       }
     }
   });
