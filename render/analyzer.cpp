@@ -120,80 +120,120 @@ TexelSplits texel_splits(int n, const std::vector<int>& levels) {
   return out;
 }
 
-/// Where a quadrature point is fine texel (x, y) of the first pass, its splits come from `aligned`
-/// (the same values, computed once per point instead of once per texel).
-struct Aligned {
+/// Quadrature points to add to the sums: values v[j] at points q[j], j < count. In the first pass
+/// (q null) the points are fine texels, `texel[j]` = (x, y), each of solid angle `texel_area`, whose
+/// splits for the exact levels come from `splits` (computed once per point instead of once per texel).
+struct Batch {
+  const DirectionValues* v;
+  const QuadraturePoint* q;
+  std::size_t count;
+  const std::array<int, 2>* texel = nullptr;
   const TexelSplits* splits = nullptr;
-  int x = 0, y = 0;
+  double texel_area = 0;
 };
 
-void accumulate(const DirectionValues& v, const QuadraturePoint& q, const AnalyzerOptions& o,
-                const std::vector<int>& distribution, Sums& s, Aligned aligned = {}) {
-  const double w = q.w;
-  double f[3], f2[3];
-  for (int c = 0; c < 3; ++c) {
-    f[c] = channel(v.f, c);
-    f2[c] = f[c] * f[c];
-    s.integral[c] += w * f[c];
-  }
-  s.integral_blind += w * v.f_blind;
-  // w / p per density, one division each (0 where the density is 0)
-  std::array<double, kMaxDistributions> w_over_pl{};
-  for (std::size_t k = 0; k < kMaxDistributions; ++k)
-    if (v.p_light[k] > 0) w_over_pl[k] = w / double(v.p_light[k]);
-  const float pb = v.p_bsdf;
-  const double w_over_pb = pb > 0 ? w / double(pb) : 0.0;
+/// Adds a batch to the sums, one running sum at a time over a chunk of points (each strategy's sums
+/// stay in registers): every sum gets the same terms in the same order as point by point.
+void accumulate(const Batch& b, const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s) {
+  constexpr std::size_t kChunk = 64;
   const bool power = o.heuristic == Heuristic::Power;
-  for (std::size_t i = 0; i < o.strategies.size(); ++i) {
-    const Strategy st = o.strategies[i];
-    const int k = distribution[i];
-    const float pl = k >= 0 ? v.p_light[static_cast<std::size_t>(k)] : 0.0f;
-    float wl = 1, wb = 1;  // the integrator's weights (Integrator::li)
-    if (st == Strategy::Bsdf) wl = 0;
-    else if (st == Strategy::Env) wb = 0;
-    else {
-      wl = power ? power_heuristic(1, pl, 1, pb) : balance_heuristic(1, pl, 1, pb);
-      wb = power ? power_heuristic(1, pb, 1, pl) : balance_heuristic(1, pb, 1, pl);
-    }
-    StrategySums& ss = s.strategies[i];
-    if (pl > 0 && wl > 0) {
-      const double a = double(wl) * wl * w_over_pl[static_cast<std::size_t>(k)], b = w * wl;
+  double f[kChunk][3], f2[kChunk][3], w[kChunk], w_over_pb[kChunk];
+  double w_over_pl[kChunk][kMaxDistributions];  // w / p per density, one division each (0 where p is 0)
+  for (std::size_t j0 = 0; j0 < b.count; j0 += kChunk) {
+    const std::size_t m = std::min(kChunk, b.count - j0);
+    const DirectionValues* v = b.v + j0;
+    for (std::size_t j = 0; j < m; ++j) {
+      w[j] = b.q ? b.q[j0 + j].w : b.texel_area;
       for (int c = 0; c < 3; ++c) {
-        ss.a_light[c] += a * f2[c];
-        ss.b_light[c] += b * f[c];
+        f[j][c] = channel(v[j].f, c);
+        f2[j][c] = f[j][c] * f[j][c];
+        s.integral[c] += w[j] * f[j][c];
+      }
+      s.integral_blind += w[j] * v[j].f_blind;
+      for (std::size_t k = 0; k < kMaxDistributions; ++k)
+        w_over_pl[j][k] = v[j].p_light[k] > 0 ? w[j] / double(v[j].p_light[k]) : 0.0;
+      w_over_pb[j] = v[j].p_bsdf > 0 ? w[j] / double(v[j].p_bsdf) : 0.0;
+    }
+    for (std::size_t i = 0; i < o.strategies.size(); ++i) {
+      const Strategy st = o.strategies[i];
+      const int k = distribution[i];
+      StrategySums& ss = s.strategies[i];
+      std::array<double, 3> a_light = ss.a_light, a_bsdf = ss.a_bsdf, b_light = ss.b_light, b_bsdf = ss.b_bsdf;
+      for (std::size_t j = 0; j < m; ++j) {
+        const float pl = k >= 0 ? v[j].p_light[static_cast<std::size_t>(k)] : 0.0f, pb = v[j].p_bsdf;
+        float wl = 1, wb = 1;  // the integrator's weights (Integrator::li)
+        if (st == Strategy::Bsdf) wl = 0;
+        else if (st == Strategy::Env) wb = 0;
+        else {
+          wl = power ? power_heuristic(1, pl, 1, pb) : balance_heuristic(1, pl, 1, pb);
+          wb = power ? power_heuristic(1, pb, 1, pl) : balance_heuristic(1, pb, 1, pl);
+        }
+        if (pl > 0 && wl > 0) {
+          const double a = double(wl) * wl * w_over_pl[j][static_cast<std::size_t>(k)], bw = w[j] * wl;
+          for (int c = 0; c < 3; ++c) {
+            a_light[c] += a * f2[j][c];
+            b_light[c] += bw * f[j][c];
+          }
+        }
+        if (pb > 0 && wb > 0) {
+          const double a = double(wb) * wb * w_over_pb[j], bw = w[j] * wb;
+          for (int c = 0; c < 3; ++c) {
+            a_bsdf[c] += a * f2[j][c];
+            b_bsdf[c] += bw * f[j][c];
+          }
+        }
+      }
+      ss.a_light = a_light;
+      ss.a_bsdf = a_bsdf;
+      ss.b_light = b_light;
+      ss.b_bsdf = b_bsdf;
+    }
+    for (std::size_t k = 0; k < kMaxDistributions; ++k) {
+      std::array<double, 3> sq = s.light_sq[k], mean = s.light_mean[k];
+      for (std::size_t j = 0; j < m; ++j) {
+        if (!(v[j].p_light[k] > 0)) continue;
+        for (int c = 0; c < 3; ++c) {
+          sq[c] += w_over_pl[j][k] * f2[j][c];
+          mean[c] += w[j] * f[j][c];
+        }
+      }
+      s.light_sq[k] = sq;
+      s.light_mean[k] = mean;
+    }
+    for (std::size_t j = 0; j < m; ++j)
+      if (v[j].f_blind > 0) {
+        const double w_over_blind = w[j] / double(v[j].f_blind);
+        for (int c = 0; c < 3; ++c) s.product_sq[c] += w_over_blind * f2[j][c];
+      }
+    for (std::size_t j = 0; j < m; ++j) {
+      const double add[4] = {w[j] * v[j].f_blind, w_over_pl[j][0] * f2[j][0], w_over_pl[j][0] * f2[j][1],
+                             w_over_pl[j][0] * f2[j][2]};
+      for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
+        const int t = o.exact_levels[l];
+        Split sx, sy;
+        if (b.q) {
+          const QuadraturePoint& q = b.q[j0 + j];
+          sx = split(q.x, q.size, t);
+          sy = split(q.y, q.size, t);
+        } else {
+          sx = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][0])];
+          sy = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][1])];
+        }
+        for (int cy = sy.c0; cy <= sy.c1; ++cy)
+          for (int cx = sx.c0; cx <= sx.c1; ++cx) {
+            const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
+            auto& cell = s.exact[l][static_cast<std::size_t>(cy) * t + cx];
+            for (int c = 0; c < 4; ++c) cell[c] += share * add[c];
+          }
       }
     }
-    if (pb > 0 && wb > 0) {
-      const double a = double(wb) * wb * w_over_pb, b = w * wb;
-      for (int c = 0; c < 3; ++c) {
-        ss.a_bsdf[c] += a * f2[c];
-        ss.b_bsdf[c] += b * f[c];
-      }
-    }
   }
-  for (std::size_t k = 0; k < kMaxDistributions; ++k) {
-    if (!(v.p_light[k] > 0)) continue;
-    for (int c = 0; c < 3; ++c) {
-      s.light_sq[k][c] += w_over_pl[k] * f2[c];
-      s.light_mean[k][c] += w * f[c];
-    }
-  }
-  if (v.f_blind > 0) {
-    const double w_over_blind = w / double(v.f_blind);
-    for (int c = 0; c < 3; ++c) s.product_sq[c] += w_over_blind * f2[c];
-  }
-  const double add[4] = {w * v.f_blind, w_over_pl[0] * f2[0], w_over_pl[0] * f2[1], w_over_pl[0] * f2[2]};
-  for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
-    const int t = o.exact_levels[l];
-    const Split sx = aligned.splits ? (*aligned.splits)[l][static_cast<std::size_t>(aligned.x)] : split(q.x, q.size, t);
-    const Split sy = aligned.splits ? (*aligned.splits)[l][static_cast<std::size_t>(aligned.y)] : split(q.y, q.size, t);
-    for (int cy = sy.c0; cy <= sy.c1; ++cy)
-      for (int cx = sx.c0; cx <= sx.c1; ++cx) {
-        const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
-        auto& cell = s.exact[l][static_cast<std::size_t>(cy) * t + cx];
-        for (int k = 0; k < 4; ++k) cell[k] += share * add[k];
-      }
-  }
+}
+
+/// One point.
+void accumulate(const DirectionValues& v, const QuadraturePoint& q, const AnalyzerOptions& o,
+                const std::vector<int>& distribution, Sums& s) {
+  accumulate(Batch{&v, &q, 1}, o, distribution, s);
 }
 
 /// The first pass's values of the integrands refinement watches, per fine texel (0 where f is 0):
@@ -294,27 +334,36 @@ namespace {
 constexpr int kMaxPointsPerSide = 64;  // in one texel
 constexpr double kDeepTolerance = 100;
 
-/// Evaluates the texel square `whole` on a k x k grid, adds the points to the sums (and to *kept, so
-/// that they can be taken out again) and returns their watched integrals (see TexelGrid).
+/// The points of a refined texel, kept so that they can be taken out of the sums again.
+struct Kept {
+  std::vector<DirectionValues> v;
+  std::vector<QuadraturePoint> q;
+  Batch batch() const { return {v.data(), q.data(), v.size()}; }
+};
+
+/// Evaluates the texel square `whole` on a k x k grid, adds the points to the sums (and to *kept)
+/// and returns their watched integrals (see TexelGrid).
 std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePoint& whole, int k, double texel_area,
-                                 std::vector<std::pair<DirectionValues, QuadraturePoint>>* kept,
-                                 const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s,
+                                 Kept* kept, const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s,
                                  PointAnalysis* r) {
   std::array<double, 3> watched{};
   const double size = whole.size / k, w = texel_area / (double(k) * k);
+  kept->v.clear();
+  kept->q.clear();
   DirectionValues v;
   for (int j = 0; j < k; ++j)
     for (int i = 0; i < k; ++i) {
       const QuadraturePoint q{whole.x + i * size, whole.y + j * size, size, w};
       if (!point.eval(q.centre(), &v)) continue;
       ++r->evaluations;
-      accumulate(v, q, o, distribution, s);
-      kept->push_back({v, q});
+      kept->v.push_back(v);
+      kept->q.push_back(q);
       const double fa = v.f.average();
       watched[0] += w * v.f_blind;
       if (v.p_light[0] > 0) watched[1] += w * fa * fa / v.p_light[0];
       if (v.p_bsdf > 0) watched[2] += w * fa * fa / v.p_bsdf;
     }
+  accumulate(kept->batch(), o, distribution, s);
   return watched;
 }
 
@@ -341,6 +390,7 @@ struct FirstPass {
       throw Error("analyzer: the oracle's cells are not the quadrature's texels");
     scratch.values.resize(size);
     scratch.counts.resize(size);
+    scratch.texel.resize(size);
     if (oracle >= 0) scratch.bsdf.resize(size);
     for (int y0 = 0; y0 < n; y0 += band) {
       const int rows = std::min(band, n - y0);
@@ -348,19 +398,21 @@ struct FirstPass {
       for (std::size_t j = 0; j < count; ++j)
         scratch.counts[j] = point.eval_centre(first + j, &scratch.values[j], oracle >= 0 ? &scratch.bsdf[j] : nullptr);
       if (oracle >= 0) oracle_densities(scratch, y0, rows);
+      std::size_t counted = 0;  // the band's counted texels, moved to its front
       for (std::size_t j = 0; j < count; ++j) {
         if (!scratch.counts[j]) continue;
         const DirectionValues& v = scratch.values[j];
-        const int x = static_cast<int>(j % un), y = y0 + static_cast<int>(j / un);
-        const QuadraturePoint q{double(x) / n, double(y) / n, 1.0 / n, texel_area};
-        ++r->evaluations;
-        accumulate(v, q, options, distribution, s, {&splits, x, y});
+        scratch.texel[counted] = {static_cast<int>(j % un), y0 + static_cast<int>(j / un)};
         const float fa = v.f.average();
         const std::array<float, 3> watched{v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
                                            v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
         scratch.grid[first + j] = watched;
         for (int k = 0; k < 3; ++k) (*total)[k] += watched[k];  // the texels left at 0 add nothing
+        scratch.values[counted++] = v;
       }
+      r->evaluations += counted;
+      accumulate(Batch{scratch.values.data(), nullptr, counted, scratch.texel.data(), &splits, texel_area}, options,
+                 distribution, s);
     }
   }
 
@@ -422,7 +474,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   if (m > 1) {
     std::array<double, 3> total;
     for (int k = 0; k < 3; ++k) total[k] = grid.total[k] * texel_area;
-    std::vector<std::pair<DirectionValues, QuadraturePoint>> kept;
+    Kept kept;
     for (int t : texels_to_refine(grid, options_.refine_share, options_.refine_tolerance)) {
       const QuadraturePoint whole{double(t % n) / n, double(t / n) / n, 1.0 / n, -texel_area};
       point.eval(whole.centre(), &v);
@@ -430,17 +482,14 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
       std::array<double, 3> previous;
       for (int k = 0; k < 3; ++k) previous[k] = double(grid.q[static_cast<std::size_t>(t)][k]) * texel_area;
       for (int k = m;; k *= m) {
-        kept.clear();
         const std::array<double, 3> current = add_square(point, whole, k, texel_area, &kept, options_, distribution_, s, &r);
         if (k * m > kMaxPointsPerSide) break;
         double change = 0;
         for (int q = 0; q < 3; ++q)
           if (total[q] > 0) change = std::max(change, std::fabs(current[q] - previous[q]) / total[q]);
         if (change / m <= kDeepTolerance * options_.refine_tolerance) break;
-        for (auto& [value, point_q] : kept) {
-          point_q.w = -point_q.w;
-          accumulate(value, point_q, options_, distribution_, s);
-        }
+        for (QuadraturePoint& q : kept.q) q.w = -q.w;
+        accumulate(kept.batch(), options_, distribution_, s);
         previous = current;
       }
     }

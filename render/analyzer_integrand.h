@@ -52,6 +52,7 @@ struct PassScratch {
   std::vector<std::array<float, 3>> grid;
   std::vector<DirectionValues> values;
   std::vector<char> counts;  // per texel of the band: whether f is not 0 there
+  std::vector<std::array<int, 2>> texel;  // the band's counted texels (x, y)
   std::vector<OracleSampler::TexelBsdf> bsdf, cell;
 };
 

@@ -73,6 +73,12 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   T_ = options.top_resolution;
   S_ = options.subdivision;
   const int TS = T_ * S_;
+  // Lookups instead of integer divisions where a pdf locates a texel.
+  leaf_index_.resize(static_cast<std::size_t>(TS) * TS);
+  for (int leaf = 0; leaf < TS * TS; ++leaf) {
+    const int lx = leaf % TS, ly = leaf / TS;
+    leaf_index_[static_cast<std::size_t>(leaf)] = {(ly / S_) * T_ + lx / S_, (ly % S_) * S_ + lx % S_};
+  }
   const FineTexels kind = resolve_fine_texels(options.fine_texels, map);
   if (kind == FineTexels::Map) {
     if (map.layout() != MapLayout::LatLong) throw Error("fine texels 'map' needs a lat-long map");
@@ -100,6 +106,8 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
   if (TS * per_leaf > kMaxFine) per_leaf = kMaxFine / TS;
   F_ = per_leaf * S_;
   N_ = T_ * F_;
+  axis_leaf_.resize(static_cast<std::size_t>(N_));
+  for (int x = 0; x < N_; ++x) axis_leaf_[static_cast<std::size_t>(x)] = x / per_leaf;
   auto fine = std::make_shared<detail::FineLevel>(TS, per_leaf);  // its cells are the sub-cells
   fine_ = fine;
   integral_ = detail::build_texel_importance(map, *fine, {options.floor, options.peak_ratio, options.compensated});
@@ -118,9 +126,9 @@ int ImportanceTable::importance_width() const { return map_texels_ ? map_texels_
 int ImportanceTable::importance_height() const { return map_texels_ ? map_texels_->height() : N_; }
 
 void ImportanceTable::cell_and_sub(int leaf, int& c, int& s) const {
-  const int TS = T_ * S_, lx = leaf % TS, ly = leaf / TS;
-  c = (ly / S_) * T_ + lx / S_;
-  s = (ly % S_) * S_ + lx % S_;
+  const LeafIndex& e = leaf_index_[static_cast<std::size_t>(leaf)];
+  c = e.cell;
+  s = e.sub;
 }
 
 // From the fine level's sums per sub-cell: the top cells' sums, the top level and each cell's
@@ -321,7 +329,8 @@ ImportanceTable::Located ImportanceTable::locate(Point2 p) const {
 }
 
 ImportanceTable::Located ImportanceTable::locate_texel(int x, int y) const {
-  const int TS = T_ * S_, F = fine_->per_cell(), lx = x / F, ly = y / F;
+  const int TS = T_ * S_, F = fine_->per_cell(), lx = axis_leaf_[static_cast<std::size_t>(x)],
+            ly = axis_leaf_[static_cast<std::size_t>(y)];
   Located at{0, 0, ly * TS + lx, x - lx * F, y - ly * F};
   cell_and_sub(at.leaf, at.cell, at.sub);
   return at;
@@ -515,6 +524,7 @@ std::size_t ImportanceTable::bytes_used() const {
   b += fine_ ? fine_->bytes_used() : map_texels_->bytes_used();
   b += static_cast<std::size_t>(top_.padded_size() + 2 * T_) * sizeof(float);
   b += (cones_.capacity() + sub_cones_.capacity()) * sizeof(Cone);
+  b += leaf_index_.capacity() * sizeof(LeafIndex) + axis_leaf_.capacity() * sizeof(std::int32_t);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
   for (const auto& a : sub_soa_) b += a.capacity() * sizeof(float);
   if (S_ > 1)

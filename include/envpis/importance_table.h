@@ -45,6 +45,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -235,6 +236,11 @@ class ImportanceTable {
   void build_cones();
   void build_moments(const std::vector<detail::DirectionSums>& leaf);
   void cell_and_sub(int leaf, int& c, int& s) const;  // the top cell and sub-cell of a leaf
+  struct LeafIndex {
+    std::int32_t cell, sub;
+  };
+  std::vector<LeafIndex> leaf_index_;  // per leaf (sub-cell of the T S x T S grid): cell_and_sub's answer
+  std::vector<std::int32_t> axis_leaf_;  // equal-area: per fine texel column (= row), its leaf column
   struct Located {  // where an equal-area point is: top cell, sub-cell in it, fine-level cell,
     int cell, sub, leaf, tx, ty;  // texel (tx, ty) in the fine-level cell
   };
