@@ -400,7 +400,10 @@ struct FirstPass {
       if (oracle >= 0) oracle_densities(scratch, y0, rows);
       std::size_t counted = 0;  // the band's counted texels, moved to its front
       for (std::size_t j = 0; j < count; ++j) {
-        if (!scratch.counts[j]) continue;
+        if (!scratch.counts[j]) {
+          scratch.grid[first + j] = {};
+          continue;
+        }
         const DirectionValues& v = scratch.values[j];
         scratch.texel[counted] = {static_cast<int>(j % un), y0 + static_cast<int>(j / un)};
         const float fa = v.f.average();
@@ -460,7 +463,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
 
   TexelGrid grid;
   grid.n = n;
-  scratch->grid.assign(static_cast<std::size_t>(n) * n, std::array<float, 3>{});
+  scratch->grid.resize(static_cast<std::size_t>(n) * n);  // the first pass writes every texel
   const FirstPass pass{point, samplers, options_, distribution_, n, oracle_rows_ > 0 ? oracle_ : -1,
                        oracle_rows_ > 0 ? oracle_rows_ : 8};
   pass.run(*scratch, s, &r, &grid.total);
