@@ -149,6 +149,9 @@ std::array<double, 3> add_square(const PointEvaluator& point, const QuadraturePo
 
 namespace {
 
+/// Rows of texels per band of the first pass when no oracle's cells set them.
+constexpr int kBandRows = 8;
+
 /// Pass 1: the centre of every fine texel (directions, radiance and the point-independent densities
 /// from the per-map TexelCentres), in bands of `band` rows. With an oracle whose cells are `band` rows
 /// of the quadrature's texels (oracle >= 0), its texel distributions are built from the band's own
@@ -159,13 +162,11 @@ struct FirstPass {
   const AnalyzerOptions& options;
   const std::vector<int>& distribution;
   int n, oracle, band;
+  double texel_area;
 
   void run(PassScratch& scratch, Sums& s, PointAnalysis* r, std::array<double, 3>* total) const {
-    const double texel_area = 4.0 * kPi / (double(n) * n);
     const TexelSplits splits = texel_splits(n, options.exact_levels);
     const std::size_t un = static_cast<std::size_t>(n), size = static_cast<std::size_t>(band) * un;
-    if (oracle >= 0 && (n % band != 0 || !samplers[static_cast<std::size_t>(oracle)].oracle_sampler()))
-      throw Error("analyzer: the oracle's cells are not the quadrature's texels");
     scratch.values.resize(size);
     scratch.counts.resize(size);
     scratch.texel.resize(size);
@@ -197,14 +198,15 @@ struct FirstPass {
     }
   }
 
-  // The oracle's cells in the band get their texel distributions from the band's BSDF values, then
-  // every counted texel its density.
+  // The oracle's cells in the band (a row of them: band is their side, a divisor of n) get their texel
+  // distributions from the band's BSDF values, then every counted texel its density (0 without an
+  // oracle sampler: an empty table, as LightSampler::pdf_square says).
   void oracle_densities(PassScratch& scratch, int y0, int rows) const {
     const OracleSampler* o = samplers[static_cast<std::size_t>(oracle)].oracle_sampler();
     const std::size_t un = static_cast<std::size_t>(n), F = static_cast<std::size_t>(band), cells = un / F;
-    const std::size_t row = static_cast<std::size_t>(y0) / F;  // the band's row of cells (rows == band)
+    const std::size_t row = static_cast<std::size_t>(y0) / F;
     scratch.cell.resize(F * F);
-    for (std::size_t cx = 0; cx < cells; ++cx) {
+    for (std::size_t cx = 0; o && cx < cells; ++cx) {
       for (std::size_t y = 0; y < F; ++y)
         std::copy_n(scratch.bsdf.begin() + static_cast<std::ptrdiff_t>(y * un + cx * F), F,
                     scratch.cell.begin() + static_cast<std::ptrdiff_t>(y * F));
@@ -214,7 +216,8 @@ struct FirstPass {
       if (scratch.counts[j]) {
         const std::size_t x = j % un, y = j / un;
         scratch.values[j].p_light[static_cast<std::size_t>(oracle)] =
-            o->texel_pdf(static_cast<int>(row * cells + x / F), static_cast<int>(x % F), static_cast<int>(y));
+            o ? o->texel_pdf(static_cast<int>(row * cells + x / F), static_cast<int>(x % F), static_cast<int>(y))
+              : 0.0f;
       }
   }
 };
@@ -231,7 +234,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   std::unique_ptr<PassScratch> scratch = std::move(pass_scratch_.local());
   if (!scratch) scratch = std::make_unique<PassScratch>();
   const PointEvaluator point(scene_, hit, -camera_ray.direction, options_.visibility, tables_, *centres_, jitter,
-                             samplers, oracle_rows_ > 0 ? oracle_ : -1);
+                             samplers, shared_oracle_);
   const int n = grid_resolution();
   const double texel_area = 4.0 * kPi / (double(n) * n);
   Sums s;
@@ -242,8 +245,8 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   TexelGrid grid;
   grid.n = n;
   scratch->grid.resize(static_cast<std::size_t>(n) * n);  // the first pass writes every texel
-  const FirstPass pass{point, samplers, options_, distribution_, n, oracle_rows_ > 0 ? oracle_ : -1,
-                       oracle_rows_ > 0 ? oracle_rows_ : 8};
+  const FirstPass pass{point, samplers, options_, distribution_, n, shared_oracle_,
+                       shared_oracle_ >= 0 ? oracle_rows_ : kBandRows, texel_area};
   pass.run(*scratch, s, &r, &grid.total);
   grid.q.swap(scratch->grid);
   DirectionValues v;
@@ -334,12 +337,14 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
       throw Error("analyzer: exact level " + std::to_string(t) + " is finer than the table's fine grid (" +
                   std::to_string(n) + ")");
   centres_ = std::make_unique<TexelCentres>(env, n, tables_);
-  for (std::size_t k = 0; k < tables_.size(); ++k)
-    if (tables_[k].strategy == Strategy::Oracle) {
-      oracle_ = static_cast<int>(k);
-      const ImportanceTable& t = *tables_[k].table;  // its cells' texels are the quadrature's
-      if (t.fine_resolution() == n && t.fine_texels() == FineTexels::EqualArea) oracle_rows_ = t.cell_resolution();
+  for (std::size_t k = 0; k < tables_.size(); ++k) {
+    const ImportanceTable* t = tables_[k].table.get();
+    if (tables_[k].strategy == Strategy::Oracle && t && t->fine_resolution() == n &&
+        t->fine_texels() == FineTexels::EqualArea) {  // its cells' texels are the quadrature's
+      shared_oracle_ = static_cast<int>(k);
+      oracle_rows_ = t->cell_resolution();
     }
+  }
   build_cell_masses();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

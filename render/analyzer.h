@@ -133,9 +133,9 @@ class Analyzer {
   std::vector<int> distribution_;       // per strategy: index into tables_ (-1: no light sample)
   std::vector<std::vector<double>> cell_mass_;  // per exact level, per cell: integral of p_env
   std::unique_ptr<const analyzer_detail::TexelCentres> centres_;  // what every point's first pass shares
-  // The oracle's distribution (-1: none) and, when its texels are the quadrature's, the rows of its
-  // cells: the first pass then builds its texel distributions from its own BSDF values (else 0).
-  int oracle_ = -1, oracle_rows_ = 0;
+  // The oracle's distribution when its cells' texels are the quadrature's (else -1), and the rows of
+  // its cells: the first pass then builds its texel distributions from its own BSDF values.
+  int shared_oracle_ = -1, oracle_rows_ = 0;
   // Per thread: the first pass's memory (analyze()), kept from point to point.
   mutable tbb::enumerable_thread_specific<std::unique_ptr<analyzer_detail::PassScratch>> pass_scratch_;
   // Per thread: a light sampler per table, prepared again at each point (their memory is kept).
