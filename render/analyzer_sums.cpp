@@ -10,6 +10,139 @@ namespace envpis::render::analyzer_detail {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline double channel(Rgb c, int k) { return k == 0 ? c.r : (k == 1 ? c.g : c.b); }
+
+// Three channels and a zero lane: one register on AVX2, two on SSE2. A term left out by a branch in
+// the integrator is added here as a zero, which leaves every sum's bits unchanged (sums of finite
+// terms are never -0), so the loops have no branches.
+using Lanes = std::array<double, 4>;
+inline void add_scaled(Lanes& acc, double a, const Lanes& x) {
+  for (int c = 0; c < 4; ++c) acc[c] += a * x[c];
+}
+inline Lanes lanes(const std::array<double, 3>& s) { return {s[0], s[1], s[2], 0.0}; }
+inline void store(const Lanes& l, std::array<double, 3>& s) { s = {l[0], l[1], l[2]}; }
+
+constexpr std::size_t kChunk = 64;
+
+/// What a chunk of points contributes, per point: f and f^2 per lane, the weight w, w / p per light
+/// density and w / p_bsdf (0 where the density is 0).
+struct Chunk {
+  std::size_t m = 0;
+  Lanes f[kChunk], f2[kChunk];
+  double w[kChunk], w_over_pb[kChunk];
+  double w_over_pl[kChunk][kMaxDistributions];
+};
+
+/// One strategy's four running sums over a chunk. `weights(pl, pb)` gives the integrator's MIS weights
+/// of the light and the BSDF sample (Integrator::li); k < 0: no light sample.
+template <class Weights>
+void strategy_sums(const Chunk& ch, const DirectionValues* v, int k, Weights weights, StrategySums& ss) {
+  Lanes a_light = lanes(ss.a_light), a_bsdf = lanes(ss.a_bsdf), b_light = lanes(ss.b_light),
+        b_bsdf = lanes(ss.b_bsdf);
+  const std::size_t uk = static_cast<std::size_t>(std::max(k, 0));
+  for (std::size_t j = 0; j < ch.m; ++j) {
+    const float pl = k >= 0 ? v[j].p_light[uk] : 0.0f, pb = v[j].p_bsdf;
+    const auto [wl, wb] = weights(pl, pb);
+    if (k >= 0) {
+      const bool on = pl > 0 && wl > 0;
+      add_scaled(a_light, on ? double(wl) * wl * ch.w_over_pl[j][uk] : 0.0, ch.f2[j]);
+      add_scaled(b_light, on ? ch.w[j] * wl : 0.0, ch.f[j]);
+    }
+    const bool on = pb > 0 && wb > 0;
+    add_scaled(a_bsdf, on ? double(wb) * wb * ch.w_over_pb[j] : 0.0, ch.f2[j]);
+    add_scaled(b_bsdf, on ? ch.w[j] * wb : 0.0, ch.f[j]);
+  }
+  store(a_light, ss.a_light);
+  store(a_bsdf, ss.a_bsdf);
+  store(b_light, ss.b_light);
+  store(b_bsdf, ss.b_bsdf);
+}
+
+/// The chunk's per-point factors, and its share of the integrals.
+void fill(const Batch& b, std::size_t j0, Chunk& ch, Sums& s) {
+  Lanes integral = lanes(s.integral);
+  for (std::size_t j = 0; j < ch.m; ++j) {
+    const DirectionValues& v = b.v[j0 + j];
+    const double w = b.q ? b.q[j0 + j].w : b.texel_area;
+    ch.w[j] = w;
+    for (int c = 0; c < 3; ++c) ch.f[j][c] = channel(v.f, c);
+    ch.f[j][3] = 0;
+    for (int c = 0; c < 4; ++c) ch.f2[j][c] = ch.f[j][c] * ch.f[j][c];
+    add_scaled(integral, w, ch.f[j]);
+    s.integral_blind += w * v.f_blind;
+    for (std::size_t k = 0; k < kMaxDistributions; ++k)
+      ch.w_over_pl[j][k] = v.p_light[k] > 0 ? w / double(v.p_light[k]) : 0.0;
+    ch.w_over_pb[j] = v.p_bsdf > 0 ? w / double(v.p_bsdf) : 0.0;
+  }
+  store(integral, s.integral);
+}
+
+struct LightBsdfWeights {
+  float l, b;
+};
+
+void chunk_strategies(const Chunk& ch, const DirectionValues* v, const AnalyzerOptions& o,
+                      const std::vector<int>& distribution, Sums& s) {
+  for (std::size_t i = 0; i < o.strategies.size(); ++i) {
+    const Strategy st = o.strategies[i];
+    const int k = distribution[i];
+    StrategySums& ss = s.strategies[i];
+    if (st == Strategy::Bsdf)
+      strategy_sums(ch, v, -1, [](float, float) { return LightBsdfWeights{0, 1}; }, ss);
+    else if (st == Strategy::Env)
+      strategy_sums(ch, v, k, [](float, float) { return LightBsdfWeights{1, 0}; }, ss);
+    else if (o.heuristic == Heuristic::Power)
+      strategy_sums(ch, v, k, [](float pl, float pb) {
+        return LightBsdfWeights{power_heuristic(1, pl, 1, pb), power_heuristic(1, pb, 1, pl)};
+      }, ss);
+    else
+      strategy_sums(ch, v, k, [](float pl, float pb) {
+        return LightBsdfWeights{balance_heuristic(1, pl, 1, pb), balance_heuristic(1, pb, 1, pl)};
+      }, ss);
+  }
+}
+
+/// Each light distribution alone (f^2 / p and f where p > 0) and the exact product (f^2 / f_blind).
+void chunk_limits(const Chunk& ch, const DirectionValues* v, Sums& s) {
+  for (std::size_t k = 0; k < kMaxDistributions; ++k) {
+    Lanes sq = lanes(s.light_sq[k]), mean = lanes(s.light_mean[k]);
+    for (std::size_t j = 0; j < ch.m; ++j) {
+      add_scaled(sq, ch.w_over_pl[j][k], ch.f2[j]);
+      add_scaled(mean, v[j].p_light[k] > 0 ? ch.w[j] : 0.0, ch.f[j]);
+    }
+    store(sq, s.light_sq[k]);
+    store(mean, s.light_mean[k]);
+  }
+  Lanes product = lanes(s.product_sq);
+  for (std::size_t j = 0; j < ch.m; ++j)
+    if (v[j].f_blind > 0) add_scaled(product, ch.w[j] / double(v[j].f_blind), ch.f2[j]);
+  store(product, s.product_sq);
+}
+
+/// Per exact level, the cells each point overlaps, by their share of it.
+void chunk_exact(const Batch& b, std::size_t j0, const Chunk& ch, const AnalyzerOptions& o, Sums& s) {
+  for (std::size_t j = 0; j < ch.m; ++j) {
+    const Lanes add{ch.w[j] * b.v[j0 + j].f_blind, ch.w_over_pl[j][0] * ch.f2[j][0], ch.w_over_pl[j][0] * ch.f2[j][1],
+                    ch.w_over_pl[j][0] * ch.f2[j][2]};
+    for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
+      const int t = o.exact_levels[l];
+      Split sx, sy;
+      if (b.q) {
+        const QuadraturePoint& q = b.q[j0 + j];
+        sx = split(q.x, q.size, t);
+        sy = split(q.y, q.size, t);
+      } else {
+        sx = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][0])];
+        sy = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][1])];
+      }
+      for (int cy = sy.c0; cy <= sy.c1; ++cy)
+        for (int cx = sx.c0; cx <= sx.c1; ++cx) {
+          const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
+          add_scaled(s.exact[l][static_cast<std::size_t>(cy) * t + cx], share, add);
+        }
+    }
+  }
+}
+
 }  // namespace
 
 TexelSplits texel_splits(int n, const std::vector<int>& levels) {
@@ -21,101 +154,18 @@ TexelSplits texel_splits(int n, const std::vector<int>& levels) {
   return out;
 }
 
-/// Adds a batch to the sums, one running sum at a time over a chunk of points (each strategy's sums
-/// stay in registers): every sum gets the same terms in the same order as point by point.
+// The lanes fill one AVX2 register where the machine has it (no FMA: the same bits either way).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)  // clang 14: no flatten with clones
+__attribute__((target_clones("avx2", "default"), flatten))
+#endif
 void accumulate(const Batch& b, const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s) {
-  constexpr std::size_t kChunk = 64;
-  const bool power = o.heuristic == Heuristic::Power;
-  double f[kChunk][3], f2[kChunk][3], w[kChunk], w_over_pb[kChunk];
-  double w_over_pl[kChunk][kMaxDistributions];  // w / p per density, one division each (0 where p is 0)
+  Chunk ch;
   for (std::size_t j0 = 0; j0 < b.count; j0 += kChunk) {
-    const std::size_t m = std::min(kChunk, b.count - j0);
-    const DirectionValues* v = b.v + j0;
-    for (std::size_t j = 0; j < m; ++j) {
-      w[j] = b.q ? b.q[j0 + j].w : b.texel_area;
-      for (int c = 0; c < 3; ++c) {
-        f[j][c] = channel(v[j].f, c);
-        f2[j][c] = f[j][c] * f[j][c];
-        s.integral[c] += w[j] * f[j][c];
-      }
-      s.integral_blind += w[j] * v[j].f_blind;
-      for (std::size_t k = 0; k < kMaxDistributions; ++k)
-        w_over_pl[j][k] = v[j].p_light[k] > 0 ? w[j] / double(v[j].p_light[k]) : 0.0;
-      w_over_pb[j] = v[j].p_bsdf > 0 ? w[j] / double(v[j].p_bsdf) : 0.0;
-    }
-    for (std::size_t i = 0; i < o.strategies.size(); ++i) {
-      const Strategy st = o.strategies[i];
-      const int k = distribution[i];
-      StrategySums& ss = s.strategies[i];
-      std::array<double, 3> a_light = ss.a_light, a_bsdf = ss.a_bsdf, b_light = ss.b_light, b_bsdf = ss.b_bsdf;
-      for (std::size_t j = 0; j < m; ++j) {
-        const float pl = k >= 0 ? v[j].p_light[static_cast<std::size_t>(k)] : 0.0f, pb = v[j].p_bsdf;
-        float wl = 1, wb = 1;  // the integrator's weights (Integrator::li)
-        if (st == Strategy::Bsdf) wl = 0;
-        else if (st == Strategy::Env) wb = 0;
-        else {
-          wl = power ? power_heuristic(1, pl, 1, pb) : balance_heuristic(1, pl, 1, pb);
-          wb = power ? power_heuristic(1, pb, 1, pl) : balance_heuristic(1, pb, 1, pl);
-        }
-        if (pl > 0 && wl > 0) {
-          const double a = double(wl) * wl * w_over_pl[j][static_cast<std::size_t>(k)], bw = w[j] * wl;
-          for (int c = 0; c < 3; ++c) {
-            a_light[c] += a * f2[j][c];
-            b_light[c] += bw * f[j][c];
-          }
-        }
-        if (pb > 0 && wb > 0) {
-          const double a = double(wb) * wb * w_over_pb[j], bw = w[j] * wb;
-          for (int c = 0; c < 3; ++c) {
-            a_bsdf[c] += a * f2[j][c];
-            b_bsdf[c] += bw * f[j][c];
-          }
-        }
-      }
-      ss.a_light = a_light;
-      ss.a_bsdf = a_bsdf;
-      ss.b_light = b_light;
-      ss.b_bsdf = b_bsdf;
-    }
-    for (std::size_t k = 0; k < kMaxDistributions; ++k) {
-      std::array<double, 3> sq = s.light_sq[k], mean = s.light_mean[k];
-      for (std::size_t j = 0; j < m; ++j) {
-        if (!(v[j].p_light[k] > 0)) continue;
-        for (int c = 0; c < 3; ++c) {
-          sq[c] += w_over_pl[j][k] * f2[j][c];
-          mean[c] += w[j] * f[j][c];
-        }
-      }
-      s.light_sq[k] = sq;
-      s.light_mean[k] = mean;
-    }
-    for (std::size_t j = 0; j < m; ++j)
-      if (v[j].f_blind > 0) {
-        const double w_over_blind = w[j] / double(v[j].f_blind);
-        for (int c = 0; c < 3; ++c) s.product_sq[c] += w_over_blind * f2[j][c];
-      }
-    for (std::size_t j = 0; j < m; ++j) {
-      const double add[4] = {w[j] * v[j].f_blind, w_over_pl[j][0] * f2[j][0], w_over_pl[j][0] * f2[j][1],
-                             w_over_pl[j][0] * f2[j][2]};
-      for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
-        const int t = o.exact_levels[l];
-        Split sx, sy;
-        if (b.q) {
-          const QuadraturePoint& q = b.q[j0 + j];
-          sx = split(q.x, q.size, t);
-          sy = split(q.y, q.size, t);
-        } else {
-          sx = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][0])];
-          sy = (*b.splits)[l][static_cast<std::size_t>(b.texel[j0 + j][1])];
-        }
-        for (int cy = sy.c0; cy <= sy.c1; ++cy)
-          for (int cx = sx.c0; cx <= sx.c1; ++cx) {
-            const double share = (cx == sx.c0 ? sx.f0 : 1 - sx.f0) * (cy == sy.c0 ? sy.f0 : 1 - sy.f0);
-            auto& cell = s.exact[l][static_cast<std::size_t>(cy) * t + cx];
-            for (int c = 0; c < 4; ++c) cell[c] += share * add[c];
-          }
-      }
-    }
+    ch.m = std::min(kChunk, b.count - j0);
+    fill(b, j0, ch, s);
+    chunk_strategies(ch, b.v + j0, o, distribution, s);
+    chunk_limits(ch, b.v + j0, s);
+    chunk_exact(b, j0, ch, o, s);
   }
 }
 
