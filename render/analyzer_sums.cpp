@@ -13,7 +13,7 @@ inline double channel(Rgb c, int k) { return k == 0 ? c.r : (k == 1 ? c.g : c.b)
 
 // Three channels and a zero lane: one register on AVX2, two on SSE2. A term left out by a branch in
 // the integrator is added here as a zero, which leaves every sum's bits unchanged (sums of finite
-// terms are never -0), so the loops have no branches.
+// terms are never -0), so the strategies' and the light densities' loops have no branch per term.
 using Lanes = std::array<double, 4>;
 inline void add_scaled(Lanes& acc, double a, const Lanes& x) {
   for (int c = 0; c < 4; ++c) acc[c] += a * x[c];
