@@ -174,8 +174,10 @@ struct FirstPass {
     for (int y0 = 0; y0 < n; y0 += band) {
       const int rows = std::min(band, n - y0);
       const std::size_t first = static_cast<std::size_t>(y0) * un, count = static_cast<std::size_t>(rows) * un;
-      for (std::size_t j = 0; j < count; ++j)
-        scratch.counts[j] = point.eval_centre(first + j, &scratch.values[j], oracle >= 0 ? &scratch.bsdf[j] : nullptr);
+      // Rows and columns by loop index: no integer division per texel.
+      for (int y = 0, j = 0; y < rows; ++y)
+        for (int x = 0; x < n; ++x, ++j)
+          scratch.counts[j] = point.eval_centre(x, y0 + y, &scratch.values[j], oracle >= 0 ? &scratch.bsdf[j] : nullptr);
       if (oracle >= 0) oracle_densities(scratch, y0, rows);
       std::size_t counted = 0;  // the band's counted texels, moved to its front
       for (std::size_t j = 0; j < count; ++j) {
@@ -184,7 +186,8 @@ struct FirstPass {
           continue;
         }
         const DirectionValues& v = scratch.values[j];
-        scratch.texel[counted] = {static_cast<int>(j % un), y0 + static_cast<int>(j / un)};
+        const std::size_t y = j / un;  // counted texels only
+        scratch.texel[counted] = {static_cast<int>(j - y * un), y0 + static_cast<int>(y)};
         const float fa = v.f.average();
         const std::array<float, 3> watched{v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
                                            v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
@@ -212,13 +215,13 @@ struct FirstPass {
                     scratch.cell.begin() + static_cast<std::ptrdiff_t>(y * F));
       o->build_texels(static_cast<int>(row * cells + cx), scratch.cell.data());
     }
-    for (std::size_t j = 0; j < static_cast<std::size_t>(rows) * un; ++j)
-      if (scratch.counts[j]) {
-        const std::size_t x = j % un, y = j / un;
-        scratch.values[j].p_light[static_cast<std::size_t>(oracle)] =
-            o ? o->texel_pdf(static_cast<int>(row * cells + x / F), static_cast<int>(x % F), static_cast<int>(y))
-              : 0.0f;
-      }
+    std::size_t j = 0;
+    for (int y = 0; y < rows; ++y)
+      for (std::size_t cx = 0; cx < cells; ++cx)
+        for (int x = 0; x < band; ++x, ++j)
+          if (scratch.counts[j])
+            scratch.values[j].p_light[static_cast<std::size_t>(oracle)] =
+                o ? o->texel_pdf(static_cast<int>(row * cells + cx), x, y) : 0.0f;
   }
 };
 

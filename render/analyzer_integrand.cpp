@@ -107,8 +107,9 @@ bool PointEvaluator::eval(Point2 p, DirectionValues* out) const {
   return eval(d, [&] { return env_.eval(d); }, [&](std::size_t k) { return samplers_[k].pdf_square(p); }, out);
 }
 
-bool PointEvaluator::eval_centre(std::size_t i, DirectionValues* out, OracleSampler::TexelBsdf* bsdf) const {
-  const int n = centres_.n, x = static_cast<int>(i % std::size_t(n)), y = static_cast<int>(i / std::size_t(n));
+bool PointEvaluator::eval_centre(int x, int y, DirectionValues* out, OracleSampler::TexelBsdf* bsdf) const {
+  const int n = centres_.n;
+  const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(n) + static_cast<std::size_t>(x);
   return eval(
       centres_.direction[i], [&] { return centres_.radiance[i]; },
       [&](std::size_t k) { return fixed_[k] ? centres_.pdf[k][i] : samplers_[k].pdf_texel(x, y, n); }, out, bsdf,

@@ -68,9 +68,9 @@ class PointEvaluator {
 
   /// The values at (the direction of) equal-area point p; false when f is 0 there even without visibility.
   bool eval(Point2 p, DirectionValues* out) const;
-  /// The same at the centre of fine texel i (y * n + x), from the per-map values, but for the deferred
+  /// The same at the centre of fine texel (x, y), from the per-map values, but for the deferred
   /// distribution's density. `bsdf` (may be null) receives the material's value there when evaluated.
-  bool eval_centre(std::size_t i, DirectionValues* out, OracleSampler::TexelBsdf* bsdf = nullptr) const;
+  bool eval_centre(int x, int y, DirectionValues* out, OracleSampler::TexelBsdf* bsdf = nullptr) const;
   /// Distribution k's density at equal-area point p.
   float pdf_square(std::size_t k, Point2 p) const { return samplers_[k].pdf_square(p); }
 
