@@ -190,6 +190,27 @@ TEST(Analyzer, QuadratureConverges) {
   }
 }
 
+// The coarser exact levels are summed from the finest level they divide: each level's V must be the
+// one it has when it is analyzed alone, point by point (levels that divide each other and ones that do
+// not, on a grid whose texels straddle the cells' edges).
+TEST(Analyzer, ExactLevelsFromFinerLevelsEqualThemAlone) {
+  const Scene scene = sphere_scene(single(make_conductor_reflectance(0.1f, {0.9f, 0.9f, 0.9f})), false, smooth_sky());
+  AnalyzerOptions together = options_for({Strategy::Mis});
+  together.exact_levels = {5, 7, 10, 30};
+  const Analyzer all(scene, together);
+  for (std::size_t l = 0; l < together.exact_levels.size(); ++l) {
+    AnalyzerOptions alone = together;
+    alone.exact_levels = {together.exact_levels[l]};
+    const Analyzer one(scene, alone);
+    ASSERT_NE(one.grid_resolution() % 30, 0) << "the texels should straddle some cells' edges";
+    for (const ShadingPointRef& p : first_hit_points(scene, 2)) {
+      const auto x = all.analyze(p.ray), y = one.analyze(p.ray);
+      ASSERT_TRUE(x && y);
+      EXPECT_NEAR(x->v_exact[l], y->v_exact[0], 1e-9 * std::fabs(y->v_exact[0])) << "level " << alone.exact_levels[0];
+    }
+  }
+}
+
 // Tracing the quadrature directions changes nothing for a sphere alone (it only hides its own lower
 // hemisphere, which no direction reaches anyway), and lowers I when another sphere blocks part of
 // the sky.
