@@ -316,10 +316,14 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
   if (own_product) built.push_back(Strategy::Product);  // its own, compensated table
   if (wants(Strategy::Oracle)) built.push_back(Strategy::Oracle);
   tables_.resize(built.size());
-  auto build_one = [&](std::size_t i) { tables_[i] = build(built[i]); };
-  // The tables at once (each build has serial parts); a caller's source is asked in turn.
-  if (source) for (std::size_t i = 0; i < built.size(); ++i) build_one(i);
-  else tbb::parallel_for(std::size_t(0), built.size(), build_one);
+  // Without a source the tables are built together (they share the map's gather); a caller's source
+  // is asked in turn.
+  if (source) {
+    for (std::size_t i = 0; i < built.size(); ++i) tables_[i] = build(built[i]);
+  } else {
+    tables_ = StrategyTables::build_together(env, built, options_.oracle, options_.product, equal_area,
+                                            options_.product_compensation);
+  }
   if (wants(Strategy::Product) && !own_product) {
     StrategyTables t = tables_.front();
     t.strategy = Strategy::Product;

@@ -97,11 +97,19 @@ ProductCompensation tables_compensation(ProductCompensation c, bool deeper_verti
   return second_table(c) && !deeper_vertices && cache_entries > 0 ? ProductCompensation::Off : c;
 }
 
-StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
-                                     const ProductSamplerOptions& product, const ImportanceTableOptions& light_table,
-                                     ProductCompensation product_compensation) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+// A strategy's tables before they are built: its options, checked, and the options of its table and
+// of product's second table (none: top_resolution 0).
+struct TablePlan {
   StrategyTables t;
+  ImportanceTableOptions table, elsewhere;
+};
+
+TablePlan plan_tables(Strategy strategy, const OracleOptions& oracle, const ProductSamplerOptions& product,
+                      const ImportanceTableOptions& light_table, ProductCompensation product_compensation) {
+  TablePlan p;
+  p.table.top_resolution = p.elsewhere.top_resolution = 0;
+  StrategyTables& t = p.t;
   t.strategy = strategy;
   t.oracle = oracle;
   t.product = product;
@@ -127,31 +135,65 @@ StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strateg
   switch (base_strategy(strategy)) {  // a portal variant masks its base strategy's table per point
     case Strategy::Bsdf: break;
     case Strategy::Env:
-    case Strategy::Mis: t.table = std::make_shared<ImportanceTable>(env, opt); break;
+    case Strategy::Mis: p.table = opt; break;
     case Strategy::Product:
       opt.compensated = t.product_compensation == ProductCompensation::On;
-      t.table = std::make_shared<ImportanceTable>(env, opt);
+      p.table = opt;
       // product-portal samples its masked `table` at the other vertices: no second table for it.
       if (second_table(t.product_compensation) && !uses_portals(strategy)) {
         opt.compensated = true;
-        t.elsewhere_table = std::make_shared<ImportanceTable>(env, opt);
+        p.elsewhere = opt;
       }
       break;
     case Strategy::MisComp:
       opt.compensated = true;
-      t.table = std::make_shared<ImportanceTable>(env, opt);
+      p.table = opt;
       break;
     case Strategy::Oracle:
       opt.top_resolution = oracle.resolution;
       opt.subdivision = 1;  // the oracle weighs its own finer cells; sub-cells would only cost cones
       opt.fine_texels = FineTexels::EqualArea;  // it weighs the equal-area fine texels (render/oracle.h)
-      t.table = std::make_shared<ImportanceTable>(env, opt);
-      if (!t.table->empty()) t.oracle_cells = std::make_shared<OracleCells>(env, t.table);
+      p.table = opt;
       break;
     default: break;  // base_strategy() is never a portal variant
   }
-  t.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return t;
+  return p;
+}
+}  // namespace
+
+StrategyTables StrategyTables::build(const EnvironmentMap& env, Strategy strategy, const OracleOptions& oracle,
+                                     const ProductSamplerOptions& product, const ImportanceTableOptions& light_table,
+                                     ProductCompensation product_compensation) {
+  return build_together(env, {strategy}, oracle, product, light_table, product_compensation).front();
+}
+
+std::vector<StrategyTables> StrategyTables::build_together(const EnvironmentMap& env,
+                                                           const std::vector<Strategy>& strategies,
+                                                           const OracleOptions& oracle,
+                                                           const ProductSamplerOptions& product,
+                                                           const ImportanceTableOptions& light_table,
+                                                           ProductCompensation product_compensation) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<TablePlan> plans;
+  std::vector<ImportanceTableOptions> options;  // every table of every strategy, in turn
+  for (Strategy s : strategies) {
+    plans.push_back(plan_tables(s, oracle, product, light_table, product_compensation));
+    for (const ImportanceTableOptions* o : {&plans.back().table, &plans.back().elsewhere})
+      if (o->top_resolution > 0) options.push_back(*o);
+  }
+  const std::vector<std::shared_ptr<const ImportanceTable>> tables = ImportanceTable::build_together(env, options);
+  std::vector<StrategyTables> out;
+  std::size_t next = 0;
+  for (TablePlan& p : plans) {
+    StrategyTables& t = p.t;
+    if (p.table.top_resolution > 0) t.table = tables[next++];
+    if (p.elsewhere.top_resolution > 0) t.elsewhere_table = tables[next++];
+    if (t.strategy == Strategy::Oracle && !t.table->empty()) t.oracle_cells = std::make_shared<OracleCells>(env, t.table);
+    out.push_back(std::move(t));
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (StrategyTables& t : out) t.build_seconds = seconds;
+  return out;
 }
 
 LightSampler::LightSampler(const StrategyTables& tables, const Portals* portals)

@@ -139,6 +139,14 @@ struct StrategyTables {
                               const ProductSamplerOptions& product = {},
                               const ImportanceTableOptions& light_table = {},
                               ProductCompensation product_compensation = ProductCompensation::Off);
+  /// build() for several strategies of one map at once: their tables are built together
+  /// (ImportanceTable::build_together: tables on one fine grid share the map's gather). Each is the
+  /// StrategyTables build() gives, its build_seconds the whole call's.
+  static std::vector<StrategyTables> build_together(const EnvironmentMap& env, const std::vector<Strategy>& strategies,
+                                                    const OracleOptions& oracle = {},
+                                                    const ProductSamplerOptions& product = {},
+                                                    const ImportanceTableOptions& light_table = {},
+                                                    ProductCompensation product_compensation = ProductCompensation::Off);
 };
 
 /// The shading point a light sampler prepares for.

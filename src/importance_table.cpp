@@ -67,7 +67,68 @@ FineTexels resolve_fine_texels(FineTexels requested, const EnvironmentMap& map) 
                                                                                   : FineTexels::EqualArea;
 }
 
-ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options) {
+namespace {
+// The equal-area fine level's grid: TS x TS leaves (sub-cells) of per_leaf x per_leaf texels.
+struct FineGrid {
+  int leaves, per_leaf;
+  bool operator==(const FineGrid& o) const { return leaves == o.leaves && per_leaf == o.per_leaf; }
+};
+FineGrid fine_grid(const EnvironmentMap& map, const ImportanceTableOptions& options) {
+  const int TS = options.top_resolution * options.subdivision;
+  int n = options.fine_resolution;
+  if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)
+    const double texels = double(map.width()) * double(map.height());
+    const int n1 = static_cast<int>(std::ceil(std::sqrt(texels) - 1e-9));
+    n = std::max(n1, std::min(2 * n1, kAutoFineCap));
+  }
+  int per_leaf = std::max(1, (n + TS - 1) / TS);  // fine texels per sub-cell along one axis
+  if (TS * per_leaf > kMaxFine) per_leaf = kMaxFine / TS;
+  return {TS, per_leaf};
+}
+}  // namespace
+
+std::vector<std::shared_ptr<const ImportanceTable>> ImportanceTable::build_together(
+    const EnvironmentMap& map, const std::vector<ImportanceTableOptions>& options) {
+  for (const ImportanceTableOptions& o : options) validate(o);
+  // Groups of equal-area tables on one grid with one peak ratio: the first member's gather serves all.
+  std::vector<int> group(options.size(), -1);
+  std::vector<std::size_t> first;  // per group, its first table
+  for (std::size_t i = 0; i < options.size(); ++i) {
+    if (resolve_fine_texels(options[i].fine_texels, map) != FineTexels::EqualArea) continue;
+    for (std::size_t g = 0; g < first.size() && group[i] < 0; ++g) {
+      const ImportanceTableOptions& f = options[first[g]];
+      if (fine_grid(map, f) == fine_grid(map, options[i]) && f.peak_ratio == options[i].peak_ratio)
+        group[i] = static_cast<int>(g);
+    }
+    if (group[i] < 0) {
+      group[i] = static_cast<int>(first.size());
+      first.push_back(i);
+    }
+  }
+  std::vector<std::unique_ptr<detail::FineLevel>> gathered(first.size());
+  for (std::size_t g = 0; g < first.size(); ++g) {
+    if (std::count(group.begin(), group.end(), static_cast<int>(g)) < 2) continue;  // nothing to share
+    const FineGrid grid = fine_grid(map, options[first[g]]);
+    gathered[g] = std::make_unique<detail::FineLevel>(grid.leaves, grid.per_leaf);
+    detail::gather_texel_importance(map, *gathered[g], options[first[g]].peak_ratio);
+  }
+  std::vector<std::shared_ptr<const ImportanceTable>> out(options.size());
+  detail::parallel_for(0, static_cast<int>(options.size()), [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      const int g = group[static_cast<std::size_t>(i)];
+      const detail::FineLevel* shared = g >= 0 ? gathered[static_cast<std::size_t>(g)].get() : nullptr;
+      out[static_cast<std::size_t>(i)] =
+          std::shared_ptr<const ImportanceTable>(new ImportanceTable(map, options[static_cast<std::size_t>(i)], shared));
+    }
+  });
+  return out;
+}
+
+ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options)
+    : ImportanceTable(map, options, nullptr) {}
+
+ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options,
+                                 const detail::FineLevel* gathered) {
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
   T_ = options.top_resolution;
@@ -96,21 +157,20 @@ ImportanceTable::ImportanceTable(const EnvironmentMap& map, const ImportanceTabl
     build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return;
   }
-  int n = options.fine_resolution;
-  if (n == 0) {  // twice the map's resolution per side, up to kAutoFineCap (see the header)
-    const double texels = double(map.width()) * double(map.height());
-    const int n1 = static_cast<int>(std::ceil(std::sqrt(texels) - 1e-9));
-    n = std::max(n1, std::min(2 * n1, kAutoFineCap));
-  }
-  int per_leaf = std::max(1, (n + TS - 1) / TS);  // fine texels per sub-cell along one axis
-  if (TS * per_leaf > kMaxFine) per_leaf = kMaxFine / TS;
+  const int per_leaf = fine_grid(map, options).per_leaf;
   F_ = per_leaf * S_;
   N_ = T_ * F_;
   axis_leaf_.resize(static_cast<std::size_t>(N_));
   for (int x = 0; x < N_; ++x) axis_leaf_[static_cast<std::size_t>(x)] = x / per_leaf;
   auto fine = std::make_shared<detail::FineLevel>(TS, per_leaf);  // its cells are the sub-cells
   fine_ = fine;
-  integral_ = detail::build_texel_importance(map, *fine, {options.floor, options.peak_ratio, options.compensated});
+  const detail::TexelImportanceOptions importance{options.floor, options.peak_ratio, options.compensated};
+  if (gathered) {  // the same grid and peak ratio (build_together): the gather's values, then this floor
+    fine->values() = gathered->values();
+    integral_ = detail::finish_texel_importance(map, *fine, importance);
+  } else {
+    integral_ = detail::build_texel_importance(map, *fine, importance);
+  }
   empty_ = !(integral_ > 0);
   build_levels(fine->build());
   build_cones();

@@ -325,7 +325,7 @@ double floor_or_compensate(std::vector<float>& func, double sum, double texel_sr
 
 }  // namespace
 
-double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options) {
+void gather_texel_importance(const EnvironmentMap& map, FineLevel& fine, float peak_ratio) {
   const Setup su(map, fine);
   std::vector<float>& func = fine.values();
   ENVPIS_ASSERT(func.size() == su.total);
@@ -333,9 +333,11 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   // so that the gather combines each row as it finishes it; its N^2 doubles are freed right after.
   gather_combine(su, splat(su).get(), func);
   // 4. Peak bound: at least 1/K of the largest radiance eval returns inside the texel (texel_peak.h).
-  if (options.peak_ratio > 0) {
-    raise_to_peaks(map, su.lum, 1.0f / options.peak_ratio, fine);
-  }
+  if (peak_ratio > 0) raise_to_peaks(map, su.lum, 1.0f / peak_ratio, fine);
+}
+
+double finish_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options) {
+  std::vector<float>& func = fine.values();
   const double sum = ordered_sum(func);
   if (!(sum > 0) || !std::isfinite(sum)) {
     std::fill(func.begin(), func.end(), 0.0f);
@@ -343,7 +345,12 @@ double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const 
   }
   // A constant map's compensated table is the plain one.
   const bool compensated = options.compensated && !map_is_constant(map);
-  return floor_or_compensate(func, sum, su.table_texel_sr, options.floor, compensated);
+  return floor_or_compensate(func, sum, 4.0 * kPi / double(func.size()), options.floor, compensated);
+}
+
+double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options) {
+  gather_texel_importance(map, fine, options.peak_ratio);
+  return finish_texel_importance(map, fine, options);
 }
 
 }  // namespace envpis::detail

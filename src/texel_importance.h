@@ -16,7 +16,14 @@ struct TexelImportanceOptions {
 };
 
 /// Writes every texel's importance into fine.values(); returns the importance integrated over the
-/// sphere, 0 when the map is black (every value is then 0).
+/// sphere, 0 when the map is black (every value is then 0). The two steps below, in turn.
 double build_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options);
+
+/// The gather, the splat and the peak bound: what depends only on the map, the grid and peak_ratio,
+/// so that tables on one grid can share it (ImportanceTable::build_together).
+void gather_texel_importance(const EnvironmentMap& map, FineLevel& fine, float peak_ratio);
+/// The floor or the compensation of the gathered values (options.peak_ratio is not used); returns the
+/// integral as build_texel_importance() does.
+double finish_texel_importance(const EnvironmentMap& map, FineLevel& fine, const TexelImportanceOptions& options);
 
 }  // namespace envpis::detail

@@ -462,3 +462,45 @@ TEST(ImportanceTable, ThreadSafeConcurrentSampling) {
     ASSERT_EQ(serial[i].direction.x, parallel[i].direction.x);
   }
 }
+
+// Tables built together share the map's gather where their grid and peak ratio agree; each must be
+// bit for bit the table its options build alone: plain, compensated, another floor, the oracle's
+// shape (T 48, no sub-cells: the same grid as T 12 x S 4), another peak ratio, another grid and the
+// map's own texels, on a map with a sun and on an all-black one.
+TEST(ImportanceTable, BuiltTogetherEqualsBuiltAlone) {
+  std::vector<ImportanceTableOptions> options(8);
+  options[0].subdivision = 4;
+  options[1] = options[0];
+  options[1].compensated = true;
+  options[2] = options[0];
+  options[2].floor = 0.2f;
+  options[3].top_resolution = 48;  // the oracle's: the same fine grid as options[0]
+  options[4] = options[0];
+  options[4].peak_ratio = 2.0f;
+  options[5] = options[4];
+  options[5].compensated = true;
+  options[6].fine_resolution = 200;
+  options[7].fine_texels = FineTexels::Map;
+  const StressMap sun = stress_family().front();
+  for (const EnvironmentMap& m : {make_stress_map(sun, 256, 128), synthetic_latlong(64, 32, [](int, int) { return 0.0f; })}) {
+    const auto together = ImportanceTable::build_together(m, options);
+    ASSERT_EQ(together.size(), options.size());
+    std::mt19937_64 rng(9);
+    for (std::size_t i = 0; i < options.size(); ++i) {
+      SCOPED_TRACE("options " + std::to_string(i));
+      const ImportanceTable alone(m, options[i]);
+      const ImportanceTable& t = *together[i];
+      ASSERT_EQ(t.empty(), alone.empty());
+      ASSERT_EQ(t.fine_resolution(), alone.fine_resolution());
+      EXPECT_EQ(t.integral(), alone.integral());
+      for (int y = 0; y < t.importance_height(); ++y)
+        for (int x = 0; x < t.importance_width(); ++x) ASSERT_EQ(t.importance(x, y), alone.importance(x, y));
+      for (int k = 0; k < 2000; ++k) {
+        const Vec3 d = random_direction(rng);
+        ASSERT_EQ(t.pdf(d), alone.pdf(d));
+      }
+    }
+  }
+  options[0].top_resolution = 0;
+  EXPECT_THROW(ImportanceTable::build_together(synthetic_sky(), options), Error);
+}

@@ -141,6 +141,13 @@ class ImportanceTable {
   /// An all-black map builds an empty() table: sample() then returns no sample and pdf() is 0;
   /// renderers should fall back to BSDF sampling (the environment contributes nothing anyway).
   explicit ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options = {});
+  /// Tables of one map for several options (e.g. a plain and a compensated one), built together and in
+  /// parallel: tables whose fine level is the same equal-area grid with the same peak ratio share the
+  /// map's gather and peak bound, the costliest part of a build; each then applies its own floor or
+  /// compensation. Every table is bit for bit the one its options build alone. Throws as the
+  /// constructor does.
+  static std::vector<std::shared_ptr<const ImportanceTable>> build_together(
+      const EnvironmentMap& map, const std::vector<ImportanceTableOptions>& options);
 
   int top_resolution() const { return T_; }   ///< T
   int subdivision() const { return S_; }      ///< S: sub-cells per top cell along one axis
@@ -230,6 +237,7 @@ class ImportanceTable {
   double build_seconds() const { return build_seconds_; }
 
  private:
+  ImportanceTable(const EnvironmentMap& map, const ImportanceTableOptions& options, const detail::FineLevel* gathered);
   friend detail::CellArrays detail::cell_arrays(const ImportanceTable& table);
   friend detail::CellArrays detail::subcell_arrays(const ImportanceTable& table, int c);
   void build_levels(const std::vector<double>& subcell_sums);
