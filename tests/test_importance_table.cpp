@@ -482,7 +482,7 @@ TEST(ImportanceTable, BuiltTogetherEqualsBuiltAlone) {
   options[6].fine_resolution = 200;
   options[7].fine_texels = FineTexels::Map;
   const StressMap sun = stress_family().front();
-  for (const EnvironmentMap& m : {make_stress_map(sun, 256, 128), synthetic_latlong(64, 32, [](int, int) { return 0.0f; })}) {
+  for (const EnvironmentMap& m : {make_stress_map(sun, 128, 64), synthetic_latlong(64, 32, [](int, int) { return 0.0f; })}) {
     const auto together = ImportanceTable::build_together(m, options);
     ASSERT_EQ(together.size(), options.size());
     std::mt19937_64 rng(9);
