@@ -173,28 +173,28 @@ struct FirstPass {
     if (oracle >= 0) scratch.bsdf.resize(size);
     for (int y0 = 0; y0 < n; y0 += band) {
       const int rows = std::min(band, n - y0);
-      const std::size_t first = static_cast<std::size_t>(y0) * un, count = static_cast<std::size_t>(rows) * un;
-      // Rows and columns by loop index: no integer division per texel.
+      const std::size_t first = static_cast<std::size_t>(y0) * un;
+      // Rows and columns by loop index (j = y * n + x in the band): no integer division per texel.
       for (int y = 0, j = 0; y < rows; ++y)
         for (int x = 0; x < n; ++x, ++j)
           scratch.counts[j] = point.eval_centre(x, y0 + y, &scratch.values[j], oracle >= 0 ? &scratch.bsdf[j] : nullptr);
       if (oracle >= 0) oracle_densities(scratch, y0, rows);
       std::size_t counted = 0;  // the band's counted texels, moved to its front
-      for (std::size_t j = 0; j < count; ++j) {
-        if (!scratch.counts[j]) {
-          scratch.grid[first + j] = {};
-          continue;
+      for (std::size_t y = 0, j = 0; y < static_cast<std::size_t>(rows); ++y)
+        for (std::size_t x = 0; x < un; ++x, ++j) {
+          if (!scratch.counts[j]) {
+            scratch.grid[first + j] = {};
+            continue;
+          }
+          const DirectionValues& v = scratch.values[j];
+          scratch.texel[counted] = {static_cast<int>(x), y0 + static_cast<int>(y)};
+          const float fa = v.f.average();
+          const std::array<float, 3> watched{v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
+                                             v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
+          scratch.grid[first + j] = watched;
+          for (int k = 0; k < 3; ++k) (*total)[k] += watched[k];  // the texels left at 0 add nothing
+          scratch.values[counted++] = v;
         }
-        const DirectionValues& v = scratch.values[j];
-        const std::size_t y = j / un;  // counted texels only
-        scratch.texel[counted] = {static_cast<int>(j - y * un), y0 + static_cast<int>(y)};
-        const float fa = v.f.average();
-        const std::array<float, 3> watched{v.f_blind, v.p_light[0] > 0 ? fa * fa / v.p_light[0] : 0.0f,
-                                           v.p_bsdf > 0 ? fa * fa / v.p_bsdf : 0.0f};
-        scratch.grid[first + j] = watched;
-        for (int k = 0; k < 3; ++k) (*total)[k] += watched[k];  // the texels left at 0 add nothing
-        scratch.values[counted++] = v;
-      }
       r->evaluations += counted;
       accumulate(Batch{scratch.values.data(), nullptr, counted, scratch.texel.data(), &splits, texel_area}, options,
                  distribution, s);
@@ -242,7 +242,7 @@ std::optional<PointAnalysis> Analyzer::analyze(const Ray& camera_ray, std::uint6
   const double texel_area = 4.0 * kPi / (double(n) * n);
   Sums s;
   s.strategies.resize(options_.strategies.size());
-  for (int t : options_.exact_levels) s.exact.emplace_back(static_cast<std::size_t>(t) * t, std::array<double, 4>{});
+  s.init_exact(options_.exact_levels);
   PointAnalysis r;
 
   TexelGrid grid;

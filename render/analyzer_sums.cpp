@@ -149,24 +149,10 @@ struct CellCursor {
   }
 };
 
-/// Per exact level, the level whose cells it is summed from: the finest level it divides (itself when
-/// none). A point's share of a coarse cell is the sum of its shares of the fine cells inside it, so
-/// only the finest levels are summed point by point.
-std::vector<std::size_t> exact_sources(const std::vector<int>& levels) {
-  std::vector<std::size_t> source(levels.size());
-  for (std::size_t l = 0; l < levels.size(); ++l) {
-    source[l] = l;
-    for (std::size_t f = 0; f < levels.size(); ++f)
-      if (levels[f] % levels[l] == 0 && levels[f] > levels[source[l]]) source[l] = f;
-  }
-  return source;
-}
-
 /// Per exact level, the cells each point overlaps, by their share of it.
-void chunk_exact(const Batch& b, std::size_t j0, const Chunk& ch, const AnalyzerOptions& o,
-                 const std::vector<std::size_t>& source, Sums& s) {
+void chunk_exact(const Batch& b, std::size_t j0, const Chunk& ch, const AnalyzerOptions& o, Sums& s) {
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l) {
-    if (source[l] != l) continue;
+    if (s.exact_source[l] != l) continue;
     const int t = o.exact_levels[l];
     CellCursor cursor;
     for (std::size_t j = 0; j < ch.m; ++j) {
@@ -191,9 +177,8 @@ void chunk_exact(const Batch& b, std::size_t j0, const Chunk& ch, const Analyzer
   }
 }
 
-/// The t x t cells of a level summed from the cells of level tf, a multiple of t (a copy when equal).
+/// The t x t cells of a level summed from the cells of level tf, a multiple of t.
 std::vector<std::array<double, 4>> aggregate_cells(const std::vector<std::array<double, 4>>& fine, int tf, int t) {
-  if (tf == t) return fine;
   std::vector<std::array<double, 4>> out(static_cast<std::size_t>(t) * t, std::array<double, 4>{});
   const int r = tf / t;
   for (int y = 0; y < tf; ++y)
@@ -206,6 +191,21 @@ std::vector<std::array<double, 4>> aggregate_cells(const std::vector<std::array<
 }
 
 }  // namespace
+
+// A point's share of a coarse cell is the sum of its shares of the fine cells inside it, so only the
+// finest levels are summed point by point.
+void Sums::init_exact(const std::vector<int>& levels) {
+  exact_source.assign(levels.size(), 0);
+  exact.assign(levels.size(), {});
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    std::size_t& source = exact_source[l];
+    source = l;
+    for (std::size_t f = 0; f < levels.size(); ++f)
+      if (levels[f] % levels[l] == 0 && levels[f] > levels[source]) source = f;
+  }
+  for (std::size_t l = 0; l < levels.size(); ++l)
+    if (exact_source[l] == l) exact[l].assign(static_cast<std::size_t>(levels[l]) * levels[l], std::array<double, 4>{});
+}
 
 TexelSplits texel_splits(int n, const std::vector<int>& levels) {
   TexelSplits out;
@@ -222,13 +222,12 @@ __attribute__((target_clones("avx2", "default"), flatten))
 #endif
 void accumulate(const Batch& b, const AnalyzerOptions& o, const std::vector<int>& distribution, Sums& s) {
   Chunk ch;
-  const std::vector<std::size_t> source = exact_sources(o.exact_levels);
   for (std::size_t j0 = 0; j0 < b.count; j0 += kChunk) {
     ch.m = std::min(kChunk, b.count - j0);
     fill(b, j0, ch, s);
     chunk_strategies(ch, b.v + j0, o, distribution, s);
     chunk_limits(ch, b.v + j0, s);
-    chunk_exact(b, j0, ch, o, source, s);
+    chunk_exact(b, j0, ch, o, s);
   }
 }
 
@@ -271,10 +270,12 @@ bool finish(const Sums& s, const AnalyzerOptions& options_, const std::vector<in
     }));
   }
   r->v_product = mean_over_channels([&](int c, double I) { return s.integral_blind * s.product_sq[c] / (I * I) - 1; });
-  const std::vector<std::size_t> source = exact_sources(options_.exact_levels);
+  std::vector<std::array<double, 4>> aggregated;
   for (std::size_t l = 0; l < options_.exact_levels.size(); ++l) {
-    const std::vector<std::array<double, 4>> cells =
-        aggregate_cells(s.exact[source[l]], options_.exact_levels[source[l]], options_.exact_levels[l]);
+    const std::size_t source = s.exact_source[l];
+    if (source != l)
+      aggregated = aggregate_cells(s.exact[source], options_.exact_levels[source], options_.exact_levels[l]);
+    const std::vector<std::array<double, 4>>& cells = source == l ? s.exact[l] : aggregated;
     const auto& mass = cell_mass_[l];
     r->v_exact.push_back(mean_over_channels([&](int c, double I) {
       // p(w) = (S1[cell] / I_blind) p_env(w) / mass[cell]: integral f^2 / p = sum I_blind mass / S1 * S2.

@@ -26,8 +26,14 @@ struct Sums {
   std::vector<StrategySums> strategies;
   std::array<std::array<double, 3>, kMaxDistributions> light_sq{}, light_mean{};  // f^2/p and f where p > 0
   std::array<double, 3> product_sq{};  // f^2 / f_blind
-  /// Per exact level, per cell: integral of f_blind, then f^2 / p_env per channel.
+  /// Per exact level, per cell: integral of f_blind, then f^2 / p_env per channel. Only the levels that
+  /// are their own source are summed (the others stay empty and are aggregated by finish()).
   std::vector<std::vector<std::array<double, 4>>> exact;
+  /// Per exact level, the level its cells are summed from: the finest level it divides (itself when none).
+  std::vector<std::size_t> exact_source;
+
+  /// Sets exact_source for these levels and sizes the summed levels' cells.
+  void init_exact(const std::vector<int>& levels);
 };
 
 /// The cells [c0, c1] of a grid of t cells per side that the interval [lo, lo + size) meets (size at
