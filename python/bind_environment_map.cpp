@@ -75,7 +75,7 @@ void bind_environment_map(py::module_& m) {
           },
           py::arg("path"), py::arg("layout") = "auto", py::arg("scale") = 1.0f, py::arg("rotation") = py::none(),
           py::arg("orientation") = "panorama", py::arg("filter") = "bilinear",
-          "Loads an OpenEXR, Radiance HDR or other OpenImageIO image; envpis.Error names the file and "
+          "Loads an OpenEXR, PNG, Radiance HDR or other OpenImageIO image; envpis.Error names the file and "
           "the reason when it cannot.")
       .def_static("from_array", &from_array, py::arg("pixels"), py::arg("layout") = "auto",
                   py::arg("scale") = 1.0f, py::arg("rotation") = py::none(), py::arg("orientation") = "panorama",

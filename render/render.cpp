@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "render/render.h"
 
-#include <OpenImageIO/imageio.h>
 #include <sys/resource.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -14,6 +13,7 @@
 #include <mutex>
 #include <optional>
 
+#include "envpis/image_file.h"
 #include "render/sampler.h"
 
 namespace envpis::render {
@@ -264,28 +264,15 @@ RenderResult RenderResult::prefix(std::size_t i) const {
 }
 
 void write_exr(const std::string& path, const RenderResult& image) {
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());
-  OIIO::ImageSpec spec(image.width, image.height, 3, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"R", "G", "B"};
-  spec.attribute("compression", "zip");
-  spec.attribute("envpis:strategy", to_string(image.strategy));
-  spec.attribute("envpis:integrator", to_string(image.integrator));
-  spec.attribute("envpis:spp", image.spp);
-  if (!out->open(path, spec)) throw Error("cannot write '" + path + "': " + out->geterror());
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data()))
-    throw Error("cannot write '" + path + "': " + out->geterror());
-  if (!out->close()) throw Error("cannot write '" + path + "': " + out->geterror());
+  write_image_file(path, image.width, image.height, 3, image.rgb.data(), {"R", "G", "B"},
+                   {{"envpis:strategy", to_string(image.strategy)},
+                    {"envpis:integrator", to_string(image.integrator)},
+                    {"envpis:spp", image.spp}});
 }
 
 void write_object_id(const std::string& path, const RenderResult& image) {
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());
-  OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"id"};
-  std::vector<float> ids(image.object_id.begin(), image.object_id.end());
-  if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, ids.data()) || !out->close())
-    throw Error("cannot write '" + path + "': " + out->geterror());
+  const std::vector<float> ids(image.object_id.begin(), image.object_id.end());
+  write_image_file(path, image.width, image.height, 1, ids.data(), {"id"});
 }
 
 std::vector<RegionMean> object_means(const RenderResult& image, int object_count) {

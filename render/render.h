@@ -133,9 +133,11 @@ inline RenderResult render(const Scene& scene, Strategy strategy, int spp, std::
 /// Checks what render() would reject, without rendering (for early command-line validation).
 void validate(const RenderOptions& options);
 
-/// Writes a float (32-bit) RGB OpenEXR. Throws Error when the file cannot be written.
+/// Writes the image in the format of path's extension (envpis::write_image_file): a float (32-bit) RGB
+/// OpenEXR for .exr, with the strategy, integrator and spp in its header. Throws Error when the file
+/// cannot be written.
 void write_exr(const std::string& path, const RenderResult& image);
-/// Writes the object-id AOV as a one-channel float image (any format OpenImageIO writes).
+/// Writes the object-id AOV as a one-channel image (channel "id" in an OpenEXR), as write_exr.
 void write_object_id(const std::string& path, const RenderResult& image);
 
 /// Mean over the pixels of one object (by the object-id AOV) of (R+G+B)/3, with the variance of

@@ -1,13 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "render/texture.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-#include <png.h>
-
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+
+#include "envpis/image_file.h"
 
 namespace envpis::render {
 
@@ -29,50 +26,23 @@ Texture::Texture(int width, int height, std::vector<float> texels)
 
 namespace {
 
-/// The first line of an OpenImageIO error (libpng appends "PNG library error" on a second one).
-std::string first_line(const std::string& s) { return s.substr(0, s.find('\n')); }
-
 float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
-/// Decodes a PNG once with libpng's simplified API, which reports errors into a string: on a corrupt
-/// PNG, OpenImageIO 2.4's reader lets libpng print "libpng error: ..." on stderr before it returns its
-/// own error, an extra line that breaks the one-line error policy. Only a PNG that decodes here goes to
-/// OpenImageIO (which decodes it again, as it does every other format). begin: png_image_begin_read_*.
-template <class Begin>
-void check_png(Begin begin, const std::string& what) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  bool ok = begin(&img) != 0;
-  if (ok && (img.width > 16384 || img.height > 16384)) {
-    png_image_free(&img);
-    throw Error(what + ": unsupported image size");
-  }
-  if (ok) {
-    img.format = PNG_FORMAT_RGBA;
-    std::vector<std::uint8_t> px(PNG_IMAGE_SIZE(img));
-    ok = png_image_finish_read(&img, nullptr, px.data(), 0, nullptr) != 0;
-  }
-  const std::string message = img.message;
-  png_image_free(&img);
-  if (!ok) throw Error(what + ": cannot decode the PNG image: " + message);
+ImageReadLimits texture_limits() {
+  ImageReadLimits limits;
+  limits.max_channels = 4;
+  limits.max_side = 16384;
+  return limits;
 }
 
-bool is_png(const std::uint8_t* b, std::size_t n) { return n >= 4 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G'; }
-
-/// Reads every pixel of an opened image as RGBA floats (grey -> RGB, missing alpha -> 1).
-std::shared_ptr<const Texture> decode(OIIO::ImageInput& in, bool srgb, const std::string& what) {
-  const OIIO::ImageSpec& spec = in.spec();
-  if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1 || spec.width > 16384 || spec.height > 16384)
-    throw Error(what + ": unsupported image size");
-  const int nc = spec.nchannels;
-  std::vector<float> px(std::size_t(spec.width) * spec.height * nc);
-  if (!in.read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, px.data()))
-    throw Error(what + ": cannot decode the image: " + first_line(in.geterror()));
+/// RGBA floats from a decoded image (grey -> RGB, missing alpha -> 1).
+std::shared_ptr<const Texture> to_texture(const ImageFile& img, bool srgb) {
+  const int nc = img.channels;
   // Only 8/16-bit integer images carry an sRGB encoding; float images are linear already.
-  const bool encoded = srgb && !spec.format.is_floating_point();
-  std::vector<float> rgba(std::size_t(spec.width) * spec.height * 4);
-  for (std::size_t i = 0, n = std::size_t(spec.width) * spec.height; i < n; ++i) {
-    const float* p = &px[i * nc];
+  const bool encoded = srgb && img.integer_coded;
+  std::vector<float> rgba(std::size_t(img.width) * img.height * 4);
+  for (std::size_t i = 0, n = std::size_t(img.width) * img.height; i < n; ++i) {
+    const float* p = &img.pixels[i * nc];
     float c[4] = {p[0], nc >= 3 ? p[1] : p[0], nc >= 3 ? p[2] : p[0], nc == 2 ? p[1] : (nc >= 4 ? p[3] : 1.0f)};
     for (int k = 0; k < 4; ++k) {
       float v = std::isfinite(c[k]) ? c[k] : 0.0f;
@@ -80,39 +50,27 @@ std::shared_ptr<const Texture> decode(OIIO::ImageInput& in, bool srgb, const std
       rgba[i * 4 + k] = v;
     }
   }
-  return std::make_shared<const Texture>(spec.width, spec.height, std::move(rgba));
+  return std::make_shared<const Texture>(img.width, img.height, std::move(rgba));
 }
 
 }  // namespace
 
 std::shared_ptr<const Texture> Texture::load_file(const std::string& path, bool srgb, const std::string& what) {
-  std::uint8_t magic[4] = {0, 0, 0, 0};
-  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
-    const std::size_t n = std::fread(magic, 1, 4, f);
-    std::fclose(f);
-    if (is_png(magic, n)) check_png([&](png_image* img) { return png_image_begin_read_from_file(img, path.c_str()); }, what);
+  try {
+    return to_texture(read_image_file(path, texture_limits()), srgb);
+  } catch (const Error& e) {
+    throw Error(what + ": cannot read image '" + path + "': " + e.what());
   }
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw Error(what + ": cannot read image '" + path + "': " + first_line(OIIO::geterror()));
-  return decode(*in, srgb, what);
 }
 
 std::shared_ptr<const Texture> Texture::load_memory(const std::vector<std::uint8_t>& bytes, bool srgb,
                                                     const std::string& what) {
   if (bytes.size() < 4) throw Error(what + ": empty image data");
-  // The format from the magic number: OIIO needs a file name extension to pick a reader for memory input.
-  std::string ext;
-  if (is_png(bytes.data(), bytes.size())) ext = "png";
-  else if (bytes[0] == 0xFF && bytes[1] == 0xD8) ext = "jpg";
-  else throw Error(what + ": embedded image is neither PNG nor JPEG");
-  if (ext == "png")
-    check_png([&](png_image* img) { return png_image_begin_read_from_memory(img, bytes.data(), bytes.size()); }, what);
-  OIIO::Filesystem::IOMemReader mem(const_cast<std::uint8_t*>(bytes.data()), bytes.size());
-  auto in = OIIO::ImageInput::create(ext, false, nullptr, &mem);
-  OIIO::ImageSpec spec;
-  if (!in || !in->set_ioproxy(&mem) || !in->open("embedded." + ext, spec))
-    throw Error(what + ": cannot decode the embedded " + ext + " image: " + first_line(in ? in->geterror() : OIIO::geterror()));
-  return decode(*in, srgb, what);
+  try {
+    return to_texture(decode_image(bytes.data(), bytes.size(), texture_limits()), srgb);
+  } catch (const Error& e) {
+    throw Error(what + ": cannot decode the embedded image: " + e.what());
+  }
 }
 
 Rgba Texture::texel(int x, int y) const {

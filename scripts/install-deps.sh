@@ -11,7 +11,7 @@ PACKAGES=(
   # llvm-symbolizer: clang's sanitizer runtime symbolizes reports with it (scripts/fuzz.sh needs them)
   llvm
   # libraries (see DESIGN.md section 6)
-  libopenimageio-dev openimageio-tools libembree-dev libtbb-dev libhwy-dev
+  libopenimageio-dev libopenexr-dev openimageio-tools libembree-dev libtbb-dev libhwy-dev
   libcli11-dev nlohmann-json3-dev libboost-math-dev libassimp-dev libpng-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Running the built `envpis` command from tests: exit status and combined output, several commands at
-// once (the command's start-up, loading OpenImageIO's many shared libraries, dominates short runs), and
+// once (short runs are dominated by the command's start-up and the map's tables), and
 // the check that a bad command line fails with one line "envpis CMD: error: ...".
 #pragma once
 

@@ -264,7 +264,7 @@ TEST_F(BadInput, UnusableFilesGiveOneLineErrorsFromEveryCommand) {
       {"corrupt-data.exr", "could not read the pixels (corrupt or truncated?): "},
       {"corrupt-header.hdr", "Radiance HDR reader: "},
       {"corrupt-data.hdr", "could not read the pixels (corrupt or truncated?): "},
-      {"claims-8M-wide.exr", "the image's scanlines are implausibly large (8000000 texels of 3 channels"},
+      {"claims-8M-wide.exr", "OpenEXR reader: Cannot read image file"},  // OpenEXR refuses the 8M-texel side
       {"text.exr", "OpenEXR reader: "},
       {"text.png", "PNG reader: Not a PNG file"},
       {"truncated.png", "PNG reader: "},

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "picture.h"
 
-#include <OpenImageIO/imageio.h>
+#include "envpis/image_file.h"
 
 #include <algorithm>
 #include <cmath>
@@ -82,14 +82,7 @@ double srgb_encode(double linear) {
 }
 
 void write_png(const std::string& path, const Image& img) {
-  std::vector<unsigned char> rgb8(img.px.size());
-  for (std::size_t i = 0; i < rgb8.size(); ++i)
-    rgb8[i] = static_cast<unsigned char>(std::lround(std::clamp(double(img.px[i]), 0.0, 1.0) * 255));
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw Error("cannot write '" + path + "': " + OIIO::geterror());
-  const OIIO::ImageSpec spec(img.w, img.h, 3, OIIO::TypeDesc::UINT8);
-  if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb8.data()) || !out->close())
-    throw Error("cannot write '" + path + "': " + out->geterror());
+  write_image_file(path, img.w, img.h, 3, img.px.data());  // 8-bit: clamped to [0, 1] and rounded
 }
 
 }  // namespace envpis::app

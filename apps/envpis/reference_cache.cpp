@@ -2,7 +2,6 @@
 #ifdef ENVPIS_HAVE_RENDER
 #include "reference_cache.h"
 
-#include <OpenImageIO/imageio.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -11,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "envpis/image_file.h"
 #include "render/scenes.h"
 
 namespace envpis::app {
@@ -144,13 +144,15 @@ std::optional<Reference> load_cached_reference(const std::string& dir, const jso
     return std::nullopt;
   }
   if (!side.contains("key") || side["key"] != key) return std::nullopt;
-  auto img = OIIO::ImageInput::open(base + ".exr");
-  if (!img) return std::nullopt;
-  const OIIO::ImageSpec& spec = img->spec();
+  ImageFile img;
+  try {
+    img = read_image_file(base + ".exr");
+  } catch (const Error&) {
+    return std::nullopt;
+  }
   const int W = key["width"].get<int>(), H = key["height"].get<int>();
-  if (spec.width != W || spec.height != H || spec.nchannels != 4) return std::nullopt;
-  std::vector<float> px(static_cast<std::size_t>(W) * H * 4);
-  if (!img->read_image(0, 0, 0, 4, OIIO::TypeDesc::FLOAT, px.data())) return std::nullopt;
+  if (img.width != W || img.height != H || img.channels != 4) return std::nullopt;
+  const std::vector<float>& px = img.pixels;
   Reference r;
   r.width = W;
   r.height = H;
@@ -174,20 +176,13 @@ void store_cached_reference(const std::string& dir, const json& key, const Refer
   if (ec) throw Error("cannot create cache directory '" + dir + "': " + ec.message());
   const std::string base = cache_base(dir, key);
   const std::string tmp = base + ".tmp." + std::to_string(::getpid()) + ".exr";
-  auto out = OIIO::ImageOutput::create(tmp);
-  if (!out) throw Error("cannot write '" + tmp + "': " + OIIO::geterror());
-  OIIO::ImageSpec spec(r.width, r.height, 4, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"R", "G", "B", "variance"};
-  spec.alpha_channel = -1;
-  spec.attribute("compression", "zip");
   const std::size_t npix = static_cast<std::size_t>(r.width) * r.height;
   std::vector<float> px(npix * 4);
   for (std::size_t p = 0; p < npix; ++p) {
     for (int c = 0; c < 3; ++c) px[p * 4 + c] = r.rgb[p * 3 + c];
     px[p * 4 + 3] = r.variance[p];
   }
-  if (!out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
-    throw Error("cannot write '" + tmp + "': " + out->geterror());
+  write_image_file(tmp, r.width, r.height, 4, px.data(), {"R", "G", "B", "variance"});
   fs::rename(tmp, base + ".exr", ec);
   if (ec) throw Error("cannot write '" + base + ".exr': " + ec.message());
   json side;

@@ -11,8 +11,6 @@
 //   - every strategy converges to the same per-object means on an asset scene (z-test).
 #include <gtest/gtest.h>
 
-#include <OpenImageIO/imageio.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +23,7 @@
 #include <vector>
 
 #include "cli_util.h"
+#include "envpis/image_file.h"
 #include "render/gltf.h"
 #include "render/render.h"
 #include "render/scenes.h"
@@ -271,12 +270,9 @@ std::string base64(const std::vector<std::uint8_t>& in) {
 }
 
 void write_png(const fs::path& path, int w, int h, const std::vector<std::uint8_t>& rgb) {
-  auto out = OIIO::ImageOutput::create(path.string());
-  ASSERT_TRUE(out);
-  OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
-  ASSERT_TRUE(out->open(path.string(), spec));
-  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, rgb.data()));
-  out->close();
+  std::vector<float> px(rgb.begin(), rgb.end());
+  for (float& v : px) v /= 255.0f;
+  write_image_file(path.string(), w, h, 3, px.data());  // 8-bit: rounds back to the same codes
 }
 
 /// A 2 x 2 quad facing glTF's +Y (the renderer's +Z), UVs like make_quad, with a base-colour texture
