@@ -81,6 +81,9 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0}
 export TSAN_OPTIONS=${TSAN_OPTIONS:-suppressions=$ROOT/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1:history_size=4}
 
+# OpenImageIO linked, not loaded with dlopen (ENVPIS_OIIO_AS_MODULE=OFF): GCC 12's LeakSanitizer crashed
+# at exit ("Tracer caught signal 11") in every ctest run of a test that had loaded the module, and in no
+# run of the same test outside ctest; the cause was not found.
 # No Python module: an instrumented extension only loads into a Python started with the sanitizer
 # runtime preloaded, and the runs below are GoogleTest's (`-L unit`, the Thread tests).
 configure() {  # configure <dir> <sanitizer flags> <build the envpis command: ON|OFF>
@@ -95,7 +98,7 @@ configure() {  # configure <dir> <sanitizer flags> <build the envpis command: ON
     -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_CXX_FLAGS="$flags -fno-omit-frame-pointer" \
     -DCMAKE_EXE_LINKER_FLAGS="$flags" -DCMAKE_SHARED_LINKER_FLAGS="$flags" \
     -DENVPIS_BUILD_TESTS=ON -DENVPIS_BUILD_BENCH=OFF -DENVPIS_BUILD_APPS="$apps" -DENVPIS_BUILD_FUZZ=OFF \
-    -DENVPIS_BUILD_PYTHON=OFF >/dev/null
+    -DENVPIS_BUILD_PYTHON=OFF -DENVPIS_OIIO_AS_MODULE=OFF >/dev/null
 }
 
 run_asan() {

@@ -31,6 +31,10 @@ struct Loaded {
   std::string error;
 };
 
+#ifdef ENVPIS_OIIO_LINKED
+extern "C" const EnvpisOiioApi* envpis_oiio_module();
+Loaded load() { return {envpis_oiio_module(), {}}; }  // linked in (ENVPIS_OIIO_AS_MODULE=OFF)
+#else
 Loaded load() {
   const std::vector<std::string> paths = candidates();
   if (paths.empty()) return {nullptr, "this build of envpis has no OpenImageIO module; set ENVPIS_OIIO_MODULE"};
@@ -55,6 +59,7 @@ Loaded load() {
   }
   return {nullptr, "its OpenImageIO module was not found: tried " + tried + "; set ENVPIS_OIIO_MODULE"};
 }
+#endif
 
 const Loaded& loaded() {
   static const Loaded once = load();  // thread-safe initialization
