@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cell_cones.h"
 #include "envpis_assert.h"
 #include "envpis/equal_area.h"
 #include "fine_level.h"
@@ -112,6 +113,9 @@ std::vector<std::shared_ptr<const ImportanceTable>> ImportanceTable::build_toget
     gathered[g] = std::make_unique<detail::FineLevel>(grid.leaves, grid.per_leaf);
     detail::gather_texel_importance(map, *gathered[g], options[first[g]].peak_ratio);
   }
+  // The cones once per grid, before the tables are built side by side (each would compute them).
+  std::vector<std::shared_ptr<const detail::CellCones>> cones;
+  for (const ImportanceTableOptions& o : options) cones.push_back(detail::cell_cones(o.top_resolution, o.subdivision));
   std::vector<std::shared_ptr<const ImportanceTable>> out(options.size());
   detail::parallel_for(0, static_cast<int>(options.size()), [&](int begin, int end) {
     for (int i = begin; i < end; ++i) {
@@ -220,59 +224,6 @@ void ImportanceTable::build_levels(const std::vector<double>& subcell_sums) {
     for (int s = 0; s < per; ++s) sub_soa_[5][static_cast<std::size_t>(c) * sub_stride_ + s] = env_sub_[c].pmf(s);
 }
 
-namespace {
-// A cone that contains every direction of cell (cx, cy) of a T x T grid on the equal-area square.
-Cone bounding_cone(int T, int cx, int cy) {
-  constexpr int kEdge = 256;  // boundary samples per cell edge
-  constexpr int kInner = 16;  // interior grid for the axis
-  const float x0 = float(cx) / T, y0 = float(cy) / T, side = 1.0f / T;
-  Cone cone;
-  if (T <= 2) {  // cells of a quarter sphere or more: use the whole sphere
-    cone.axis = equal_area_square_to_sphere({x0 + 0.5f * side, y0 + 0.5f * side});
-    cone.cos_half_angle = -1.0f;
-    cone.sin_half_angle = 0.0f;
-    return cone;
-  }
-  double ax = 0, ay = 0, az = 0;
-  for (int j = 0; j < kInner; ++j)
-    for (int i = 0; i < kInner; ++i) {
-      const Vec3 d = equal_area_square_to_sphere({x0 + (i + 0.5f) * side / kInner, y0 + (j + 0.5f) * side / kInner});
-      ax += d.x;
-      ay += d.y;
-      az += d.z;
-    }
-  const double len = std::sqrt(ax * ax + ay * ay + az * az);
-  const Vec3 axis{float(ax / len), float(ay / len), float(az / len)};
-  // Walk the boundary; the largest angle from the axis over the cell is on its boundary (the cell is
-  // a connected region that does not contain the axis' antipode). Every boundary point is within half
-  // the largest gap between consecutive samples of one of them, so that half-gap is added.
-  // acos decreases monotonically, so the largest angle is acos of the smallest cosine: one acos per
-  // cell instead of one per boundary point, with the same result.
-  double min_cos = 1, min_gap_cos = 1;
-  Vec3 prev = equal_area_square_to_sphere({x0, y0});
-  for (int k = 1; k <= 4 * kEdge; ++k) {
-    const int e = (k - 1) / kEdge;
-    const float t = float(k - e * kEdge) / kEdge;
-    Point2 p;
-    switch (e) {
-      case 0: p = {x0 + t * side, y0}; break;
-      case 1: p = {x0 + side, y0 + t * side}; break;
-      case 2: p = {x0 + side - t * side, y0 + side}; break;
-      default: p = {x0, y0 + side - t * side}; break;
-    }
-    const Vec3 d = equal_area_square_to_sphere(p);
-    min_cos = std::min(min_cos, std::clamp(double(dot(d, axis)), -1.0, 1.0));
-    min_gap_cos = std::min(min_gap_cos, std::clamp(double(dot(d, prev)), -1.0, 1.0));
-    prev = d;
-  }
-  const double max_angle = std::acos(min_cos), max_gap = std::acos(min_gap_cos);
-  const double b = std::min(max_angle + 0.5 * max_gap + 1e-4, double(kPi));
-  cone.axis = axis;
-  cone.cos_half_angle = static_cast<float>(std::cos(b));
-  cone.sin_half_angle = static_cast<float>(std::sin(b));
-  return cone;
-}
-}  // namespace
 
 namespace {
 void store_cone(std::vector<float> (&soa)[10], std::size_t i, const Cone& cone) {
@@ -292,16 +243,9 @@ void store_padding(std::vector<float> (&soa)[10], std::size_t i) {
 
 void ImportanceTable::build_cones() {
   const int cells = T_ * T_, per = S_ * S_;
-  cones_.assign(cells, Cone{});
-  sub_cones_.assign(S_ > 1 ? static_cast<std::size_t>(cells) * per : 0, Cone{});
-  detail::parallel_for(0, cells, [&](int begin, int end) {
-    for (int c = begin; c < end; ++c) {
-      cones_[c] = bounding_cone(T_, c % T_, c / T_);
-      for (int s = 0; s < per && S_ > 1; ++s)
-        sub_cones_[static_cast<std::size_t>(c) * per + s] =
-            bounding_cone(T_ * S_, (c % T_) * S_ + s % S_, (c / T_) * S_ + s / S_);
-    }
-  });
+  cell_cones_ = detail::cell_cones(T_, S_);
+  cones_ = cell_cones_->top.data();
+  sub_cones_ = cell_cones_->sub.data();
   for (int c = 0; c < cells; ++c) store_cone(soa_, c, cones_[c]);
   for (int c = cells; c < top_.padded_size(); ++c) store_padding(soa_, c);
   for (int c = 0; c < cells && sub_stride_ > 0; ++c) {
@@ -583,7 +527,7 @@ std::size_t ImportanceTable::bytes_used() const {
   std::size_t b = sizeof(*this);
   b += fine_ ? fine_->bytes_used() : map_texels_->bytes_used();
   b += static_cast<std::size_t>(top_.padded_size() + 2 * T_) * sizeof(float);
-  b += (cones_.capacity() + sub_cones_.capacity()) * sizeof(Cone);
+  b += (cell_cones_->top.capacity() + cell_cones_->sub.capacity()) * sizeof(Cone);  // shared with tables on the grid
   b += leaf_index_.capacity() * sizeof(LeafIndex) + axis_leaf_.capacity() * sizeof(std::int32_t);
   for (const auto& a : soa_) b += a.capacity() * sizeof(float);
   for (const auto& a : sub_soa_) b += a.capacity() * sizeof(float);

@@ -504,3 +504,35 @@ TEST(ImportanceTable, BuiltTogetherEqualsBuiltAlone) {
   options[0].top_resolution = 0;
   EXPECT_THROW(ImportanceTable::build_together(synthetic_sky(), options), Error);
 }
+
+// The cells' cones depend on the grid alone: tables on one grid (whatever their map) share one set, a
+// table on another grid has its own, and a set computed again after every holder let go has the same
+// values.
+TEST(ImportanceTable, TablesOnOneGridShareTheirCones) {
+  ImportanceTableOptions o;
+  o.subdivision = 4;
+  std::vector<Cone> before;
+  {
+    const ImportanceTable a(synthetic_sky(64, 32), o);
+    const ImportanceTable b(make_stress_map(stress_family().front(), 128, 64), o);
+    EXPECT_EQ(&a.cell_cone(7), &b.cell_cone(7));
+    EXPECT_EQ(&a.subcell_cone(7, 3), &b.subcell_cone(7, 3));
+    ImportanceTableOptions other = o;
+    other.subdivision = 2;
+    const ImportanceTable c(synthetic_sky(64, 32), other);
+    EXPECT_NE(&a.subcell_cone(7, 3), &c.subcell_cone(7, 3));
+    for (int k = 0; k < a.cell_count(); ++k)
+      for (int s = 0; s < 16; ++s) before.push_back(a.subcell_cone(k, s));
+  }
+  const ImportanceTable again(synthetic_sky(32, 16), o);
+  std::size_t i = 0;
+  for (int k = 0; k < again.cell_count(); ++k)
+    for (int s = 0; s < 16; ++s, ++i) {
+      const Cone& c = again.subcell_cone(k, s);
+      ASSERT_EQ(c.axis.x, before[i].axis.x);
+      ASSERT_EQ(c.axis.y, before[i].axis.y);
+      ASSERT_EQ(c.axis.z, before[i].axis.z);
+      ASSERT_EQ(c.cos_half_angle, before[i].cos_half_angle);
+      ASSERT_EQ(c.sin_half_angle, before[i].sin_half_angle);
+    }
+}

@@ -59,6 +59,7 @@ namespace envpis {
 namespace detail {
 class FineLevel;
 class MapTexelLevel;
+struct CellCones;
 struct DirectionSums;
 }
 
@@ -265,8 +266,10 @@ class ImportanceTable {
   DiscreteDistribution2D top_;
   std::vector<DiscreteDistribution2D> env_sub_;  // T^2 of S x S (empty when S = 1)
   DiscreteDistribution2D whole_cell_;            // S = 1: the one sub-cell
-  std::vector<Cone> cones_;
-  std::vector<Cone> sub_cones_;  // T^2 S^2, cell-major (empty when S = 1)
+  // The cells' cones depend on the grid alone: shared by the tables on it (src/cell_cones.h).
+  std::shared_ptr<const detail::CellCones> cell_cones_;
+  const Cone* cones_ = nullptr;      // T^2, in cell_cones_
+  const Cone* sub_cones_ = nullptr;  // T^2 S^2, cell-major (none when S = 1), in cell_cones_
   // Cone axis x, y, z, cos, sin, E[c], then the importance-weighted mean direction x, y, z and its
   // spread (detail::CellArrays); padded like top_.values().
   std::vector<float> soa_[10];
