@@ -60,6 +60,15 @@ TEST(ImageFile, OpenExrRoundTripIsExactWithNamesAndAttributes) {
   EXPECT_EQ(in->spec().get_int_attribute("envpis:spp"), 64);
   EXPECT_EQ(in->spec().get_string_attribute("envpis:strategy"), "product");
 
+  // Grey with alpha: named Y and A, read back in that order (not A first, as the names sort).
+  const std::string grey = (dir / "grey.exr").string();
+  const std::vector<float> ya = ramp(w, h, 2);
+  write_image_file(grey, w, h, 2, ya.data());
+  EXPECT_EQ(read_image_file(grey).pixels, ya);
+  auto grey_in = OIIO::ImageInput::open(grey);
+  ASSERT_TRUE(grey_in) << OIIO::geterror();
+  EXPECT_EQ(grey_in->spec().channelnames, (std::vector<std::string>{"Y", "A"}));
+
   ImageReadLimits three;
   three.max_channels = 3;
   EXPECT_EQ(read_image_file(path, three).channels, 3);

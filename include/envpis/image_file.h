@@ -59,8 +59,8 @@ struct ImageAttribute {
 
 /// Writes float pixels in the format of path's extension: .exr by OpenEXR (32-bit float, ZIP), .png by
 /// libpng (8-bit, each value clamped to [0, 1] and rounded; no encoding is applied), any other through
-/// OpenImageIO. channel_names: OpenEXR's channel names (default R, G, B, A). Throws Error with a
-/// one-line reason naming the path.
+/// OpenImageIO. channel_names: OpenEXR's channel names (default by count: Y; Y, A; R, G, B; R, G, B, A).
+/// Throws Error with a one-line reason naming the path.
 void write_image_file(const std::string& path, int width, int height, int channels, const float* pixels,
                       const std::vector<std::string>& channel_names = {},
                       const std::vector<ImageAttribute>& attributes = {});

@@ -43,11 +43,14 @@ void bound_header_sizes() {
 
 std::size_t type_bytes(Imf::PixelType t) { return t == Imf::HALF ? 2 : 4; }
 
-// R, G, B, A first (those present), then the others in the file's (alphabetical) order.
+// R, G, B (or Y when none of them is there), then A (those present), then the others in the file's
+// (alphabetical) order.
 std::vector<std::string> channel_order(const Imf::ChannelList& list) {
   std::vector<std::string> names;
-  for (const char* c : {"R", "G", "B", "A"})
+  for (const char* c : {"R", "G", "B"})
     if (list.findChannel(c)) names.emplace_back(c);
+  if (names.empty() && list.findChannel("Y")) names.emplace_back("Y");
+  if (list.findChannel("A")) names.emplace_back("A");
   for (auto it = list.begin(); it != list.end(); ++it)
     if (std::find(names.begin(), names.end(), it.name()) == names.end()) names.emplace_back(it.name());
   return names;
@@ -128,7 +131,8 @@ ImageFile read_exr(const std::string& path, const ImageReadLimits& limits) {
 
 void write_exr(const std::string& path, int width, int height, int channels, const float* pixels,
                const std::vector<std::string>& channel_names, const std::vector<ImageAttribute>& attributes) {
-  static const char* const kDefault[] = {"R", "G", "B", "A"};
+  // Grey is Y (with A), colour R, G, B (with A), as OpenEXR's own RGBA interface names them.
+  static const char* const kDefault[4][4] = {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
   if (width < 1 || height < 1 || channels < 1 || (channel_names.empty() && channels > 4) ||
       (!channel_names.empty() && int(channel_names.size()) != channels))
     throw Error("cannot write '" + path + "': " + std::to_string(channels) + " channels of " +
@@ -142,7 +146,7 @@ void write_exr(const std::string& path, int width, int height, int channels, con
       else header.insert(a.name, Imf::StringAttribute(std::get<std::string>(a.value)));
     }
     std::vector<std::string> names(channels);
-    for (int c = 0; c < channels; ++c) names[c] = channel_names.empty() ? kDefault[c] : channel_names[c];
+    for (int c = 0; c < channels; ++c) names[c] = channel_names.empty() ? kDefault[channels - 1][c] : channel_names[c];
     for (const std::string& n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
     Imf::OutputFile file(path.c_str(), header);
     Imf::FrameBuffer fb;
