@@ -4,7 +4,7 @@
 // Input layout: byte 0 selects the file name extension (low 4 bits), the layout option (bits 4-5) and
 // the scale option (bits 6-7); the remaining bytes are the file's contents, written to a temporary
 // file that load() then opens: OpenEXR by OpenEXR and PNG by libpng themselves, other formats through
-// the OpenImageIO module (libenvpis_oiio.so, instrumented like the library in this build).
+// OpenImageIO (its glue linked in and instrumented in scripts/fuzz.sh's build).
 //
 // Contract checked: load() either throws envpis::Error or returns a map with positive size whose
 // texels are all finite, >= 0 and <= 1e30 (the documented repair policy), and whose eval() is finite
