@@ -66,7 +66,9 @@ struct PortalPlanes {
 
 using SquareToSphereFn = void (*)(std::size_t, const float*, const float*, float*, float*, float*);
 using SphereToSquareFn = void (*)(std::size_t, const float*, const float*, const float*, float*, float*);
-using ProductWeightsFn = void (*)(const CellArrays&, const LobeParams&, float* weights);
+/// Writes every cell's weight E[c] proxy(c) and returns their total (summed in lanes: not bit for bit
+/// DiscreteDistribution2D's sum).
+using ProductWeightsFn = float (*)(const CellArrays&, const LobeParams&, float* weights);
 using FloorWeightsFn = void (*)(float* weights, const float* env, int count, float scale, float floor);
 /// The fractions v of `count` portals' shares and the full cells; returns whether any is positive.
 using PortalSharesFn = bool (*)(const PortalCellArrays&, const PortalPlanes* planes, int count, float* v,

@@ -90,13 +90,15 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
   float sum = 0;
   bool seen = false;
   if (prepared_.valid()) {
-    kernels_->product_weights(detail::cell_arrays(*table_), lobe_params(prepared_, options_.cell_estimate), prob);
+    sum = kernels_->product_weights(detail::cell_arrays(*table_), lobe_params(prepared_, options_.cell_estimate), prob);
     if (view_) {  // the portal factor (a re-estimated cell gets it from its sub-cells instead)
       const float* v = view_->cell_fractions();
       for (int c = 0; c < cells; ++c) prob[c] *= v[c];
     }
-    if (refine_) reestimate_heaviest_cells();
-    sum = top_.sum();  // the row sums only once, after the last pass below
+    if (refine_ && options_.refine_cells > 0) reestimate_heaviest_cells();
+    // The kernel's total holds unless a pass above changed the weights; the row sums only once, after
+    // the last pass below (update()).
+    if (view_ || (refine_ && options_.refine_cells > 0)) sum = top_.sum();
     seen = DiscreteDistribution2D::valid_total(sum);
   }
   // Nothing the proxy can see: environment only. A total below FLT_MIN (denormal lobe weights) counts
@@ -140,13 +142,15 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
 // sub-cells, and `out` then holds the environment's shares.
 float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
   const detail::CellArrays cells = detail::subcell_arrays(*table_, c);
-  kernels_->product_weights(cells, lobe_params(prepared_, options_.cell_estimate), out.values());
+  float sum = kernels_->product_weights(cells, lobe_params(prepared_, options_.cell_estimate), out.values());
   const int n = table_->subdivision() * table_->subdivision();
   float* w = out.values();
   const float* env = cells.prob;  // E[s | c], or through portals the masked shares
   float masked[64];
-  if (view_ && mask_subcells(c, cells.prob, w, masked)) env = masked;
-  const float sum = out.sum();  // the row sums only once, after the floor
+  if (view_ && mask_subcells(c, cells.prob, w, masked)) {
+    env = masked;
+    sum = out.sum();  // the row sums only once, after the floor
+  }
   if (!DiscreteDistribution2D::valid_total(sum)) {
     std::copy(env, env + n, w);
     out.update();

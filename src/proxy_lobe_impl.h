@@ -110,10 +110,13 @@ ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V 
   return value;
 }
 
+// Returns the weights' total, summed in the lanes as they are written: the sampler needs it for the
+// floor, and a second pass over the weights (DiscreteDistribution2D::sum) cost as much as the kernel.
 template <class V, bool kTransmission, bool kDiffuse, bool kMoments>
-ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
+ENVPIS_INLINE float product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
   constexpr std::size_t W = lanes<V>();
   const LobeV<V> l(p);
+  V total(0.0f);
   for (std::size_t i = 0; i < static_cast<std::size_t>(cells.padded_count); i += W) {
     V value;
     if constexpr (kMoments)
@@ -125,27 +128,28 @@ ENVPIS_INLINE void product_weights_impl(const CellArrays& cells, const LobeParam
       value = proxy_cone_value<V, kTransmission, kDiffuse>(
           l, load_any<V>(cells.ax + i), load_any<V>(cells.ay + i), load_any<V>(cells.az + i),
           load_any<V>(cells.cosb + i), load_any<V>(cells.sinb + i));
-    store(value * load_any<V>(cells.prob + i), out + i);
+    const V w = value * load_any<V>(cells.prob + i);
+    total = total + w;
+    store(w, out + i);
   }
+  return lane_sum(total);
 }
 
 template <class V, bool kMoments>
-ENVPIS_INLINE void product_weights_lobes(const CellArrays& cells, const LobeParams& p, float* out) {
+ENVPIS_INLINE float product_weights_lobes(const CellArrays& cells, const LobeParams& p, float* out) {
   const bool transmission = p.kt > 0.0f || p.ct > 0.0f;
   const bool diffuse = p.kd > 0.0f || p.kt > 0.0f;
   if (transmission) {
-    if (diffuse) product_weights_impl<V, true, true, kMoments>(cells, p, out);
-    else product_weights_impl<V, true, false, kMoments>(cells, p, out);
-  } else {
-    if (diffuse) product_weights_impl<V, false, true, kMoments>(cells, p, out);
-    else product_weights_impl<V, false, false, kMoments>(cells, p, out);
+    if (diffuse) return product_weights_impl<V, true, true, kMoments>(cells, p, out);
+    return product_weights_impl<V, true, false, kMoments>(cells, p, out);
   }
+  if (diffuse) return product_weights_impl<V, false, true, kMoments>(cells, p, out);
+  return product_weights_impl<V, false, false, kMoments>(cells, p, out);
 }
 
 template <class V>
-__attribute__((flatten)) void product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
-  if (p.moments) product_weights_lobes<V, true>(cells, p, out);
-  else product_weights_lobes<V, false>(cells, p, out);
+__attribute__((flatten)) float product_weights_t(const CellArrays& cells, const LobeParams& p, float* out) {
+  return p.moments ? product_weights_lobes<V, true>(cells, p, out) : product_weights_lobes<V, false>(cells, p, out);
 }
 
 // The environment floor on product weights w (ProductSampler): a positive w becomes max(w a, r e),

@@ -31,6 +31,7 @@ ENVPIS_INLINE float vabs(float a) { return std::fabs(a); }
 ENVPIS_INLINE float vmin(float a, float b) { return std::min(a, b); }
 ENVPIS_INLINE float vmax(float a, float b) { return std::max(a, b); }
 ENVPIS_INLINE float vcopysign(float mag, float sgn) { return std::copysign(mag, sgn); }
+ENVPIS_INLINE float lane_sum(float v) { return v; }
 template <class V>
 constexpr std::size_t lanes() {
   if constexpr (std::is_same_v<V, float>) return 1;
@@ -54,6 +55,8 @@ template <class A>
 ENVPIS_INLINE void store(VF<A> v, float* p) { v.copy_to(p, stdx::element_aligned); }
 template <class A>
 ENVPIS_INLINE VF<A> vsqrt(VF<A> a) { return stdx::sqrt(a); }
+template <class A>
+ENVPIS_INLINE float lane_sum(VF<A> v) { return stdx::reduce(v); }
 template <class A>
 ENVPIS_INLINE VF<A> vabs(VF<A> a) { return stdx::abs(a); }
 template <class A>
