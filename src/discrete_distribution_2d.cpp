@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "envpis/discrete_distribution_2d.h"
 
+#include <cstring>
+
 #include "envpis_assert.h"
 
 namespace envpis {
@@ -8,12 +10,11 @@ namespace envpis {
 namespace {
 constexpr int kPad = 16;  // padded_size() is a multiple of this (the widest kernel's lane count)
 
-// Four partial sums per row keep the adds independent (update() runs per shading point).
+// A row's total (update() runs per shading point, so these sums are written for speed): four partial
+// sums keep the adds independent. Rows whose width is a multiple of 4 (the top level's 12, the
+// sub-cells' 4) take their partial sums in vector lanes, four rows at once; both ways give the same
+// sums, lane k adding row[k], row[k + 4], ... left to right, then (a0 + a1) + (a2 + a3).
 float row_total(const float* row, int w) {
-  if (w == 4) return (row[0] + row[1]) + (row[2] + row[3]);  // the sub-cells: the loop's sums below
-  if (w == 12)  // the default top level: the same sums without loop control
-    return ((row[0] + row[4]) + row[8] + ((row[1] + row[5]) + row[9])) +
-           (((row[2] + row[6]) + row[10]) + ((row[3] + row[7]) + row[11]));
   float a0 = 0, a1 = 0, a2 = 0, a3 = 0;
   int k = 0;
   for (; k + 4 <= w; k += 4) {
@@ -24,6 +25,27 @@ float row_total(const float* row, int w) {
   }
   for (; k < w; ++k) a0 += row[k];
   return (a0 + a1) + (a2 + a3);
+}
+
+using Lanes4 = float __attribute__((vector_size(16)));
+inline Lanes4 load4(const float* p) {
+  Lanes4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline Lanes4 row_lanes(const float* row, int w) {  // w a multiple of 4
+  Lanes4 a = load4(row);
+  for (int k = 4; k < w; k += 4) a += load4(row + k);
+  return a;
+}
+inline float lanes_total(Lanes4 a) { return (a[0] + a[1]) + (a[2] + a[3]); }
+// lanes_total of four rows' lanes, as one vector: a transpose, then the same two adds.
+inline Lanes4 four_totals(Lanes4 a, Lanes4 b, Lanes4 c, Lanes4 d) {
+  const Lanes4 ab_lo = __builtin_shufflevector(a, b, 0, 4, 1, 5), ab_hi = __builtin_shufflevector(a, b, 2, 6, 3, 7);
+  const Lanes4 cd_lo = __builtin_shufflevector(c, d, 0, 4, 1, 5), cd_hi = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+  const Lanes4 l0 = __builtin_shufflevector(ab_lo, cd_lo, 0, 1, 4, 5), l1 = __builtin_shufflevector(ab_lo, cd_lo, 2, 3, 6, 7);
+  const Lanes4 l2 = __builtin_shufflevector(ab_hi, cd_hi, 0, 1, 4, 5), l3 = __builtin_shufflevector(ab_hi, cd_hi, 2, 3, 6, 7);
+  return (l0 + l1) + (l2 + l3);
 }
 }  // namespace
 
@@ -41,15 +63,33 @@ DiscreteDistribution2D::DiscreteDistribution2D(const float* masses, int width, i
   update();
 }
 
-template <class OnRow>
-float DiscreteDistribution2D::accumulate_rows(OnRow on_row) const {
+// The rows' totals in order, for w = W (W > 0, known when compiled: the loops unroll) or w_ (W = 0).
+template <int W, class OnRow>
+float DiscreteDistribution2D::accumulate_rows_of(OnRow on_row) const {
+  const int w = W > 0 ? W : w_;
+  const std::size_t stride = static_cast<std::size_t>(w);
   float run = 0;
-  for (int r = 0; r < h_; ++r) {
-    const float t = row_total(mass_.data() + static_cast<std::size_t>(r) * w_, w_);
-    run += t;
-    on_row(r, t, run);
+  int r = 0;
+  const float* m = mass_.data();
+  if (w % 4 == 0) {
+    for (; r + 4 <= h_; r += 4, m += 4 * stride) {
+      const Lanes4 t = four_totals(row_lanes(m, w), row_lanes(m + stride, w), row_lanes(m + 2 * stride, w),
+                                   row_lanes(m + 3 * stride, w));
+      for (int k = 0; k < 4; ++k) on_row(r + k, t[k], run += t[k]);
+    }
+  }
+  for (; r < h_; ++r, m += stride) {
+    const float t = w % 4 == 0 ? lanes_total(row_lanes(m, w)) : row_total(m, w);
+    on_row(r, t, run += t);
   }
   return run;
+}
+
+template <class OnRow>
+float DiscreteDistribution2D::accumulate_rows(OnRow on_row) const {
+  if (w_ == 12) return accumulate_rows_of<12>(on_row);  // the product's top level
+  if (w_ == 4) return accumulate_rows_of<4>(on_row);    // its sub-cells
+  return accumulate_rows_of<0>(on_row);
 }
 
 float DiscreteDistribution2D::update() {

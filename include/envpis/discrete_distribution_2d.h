@@ -91,6 +91,8 @@ class DiscreteDistribution2D {
   std::vector<float> row_cdf_;  // h: running sums of the row totals (the last is total_)
   template <class OnRow>
   float accumulate_rows(OnRow on_row) const;  // the running sum over the rows; on_row(r, total, run)
+  template <int W, class OnRow>
+  float accumulate_rows_of(OnRow on_row) const;
   float total_ = 0, inv_total_ = 0;
 };
 
