@@ -65,12 +65,17 @@ float alpha_of(std::uint32_t steps) {
   return s * s;
 }
 
+// IOR 1 (every key without a refraction lobe) skips log2 and exp2: the same steps and value, for less.
+constexpr std::uint32_t kIorOneSteps = static_cast<std::uint32_t>(kIorOctaves * kIorStepsPerOctave);
 std::uint32_t ior_steps(float ior) {
+  if (ior == 1.0f) return kIorOneSteps;
   const float e = std::isfinite(ior) && ior > 0 ? std::log2(ior) : 0.0f;
   const float c = std::clamp(e, -kIorOctaves, kIorOctaves);
   return static_cast<std::uint32_t>((c + kIorOctaves) * kIorStepsPerOctave + 0.5f);
 }
-float ior_of(std::uint32_t steps) { return std::exp2(float(steps) / kIorStepsPerOctave - kIorOctaves); }
+float ior_of(std::uint32_t steps) {
+  return steps == kIorOneSteps ? 1.0f : std::exp2(float(steps) / kIorStepsPerOctave - kIorOctaves);
+}
 
 }  // namespace
 
@@ -202,17 +207,15 @@ std::size_t ProductCache::slot_for(const Key& k, bool& prepared) {
     ++hits_;
     return use(last_);
   }
-  // The search compares keys only (the other samples of a pixel hit here); the oldest slot is looked
-  // for on a miss alone.
+  // One pass: the slot holding k (the other samples of a pixel hit here), else the oldest, to prepare.
+  std::size_t oldest = 0;
   for (std::size_t i = 0; i < keys_.size(); ++i) {
     if (keys_[i].n == k.n && holds(i)) {
       ++hits_;
       return use(i);
     }
-  }
-  std::size_t oldest = 0;
-  for (std::size_t i = 1; i < keys_.size(); ++i)
     if (last_use_[i] < last_use_[oldest]) oldest = i;
+  }
   ++misses_;
   keys_[oldest] = k;
   prepared = false;
