@@ -107,7 +107,6 @@ ProductCache::ProductCache(const ImportanceTable& table, const Portals& portals,
 ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy) const {
   Key k;
   k.n = lattice_point(n, options_.resolution);
-  k.wo = lattice_point(wo, options_.resolution);
 
   const float w[4] = {finite_weight(proxy.diffuse), finite_weight(proxy.translucent), finite_weight(proxy.reflection),
                       finite_weight(proxy.refraction)};
@@ -115,6 +114,11 @@ ProductCache::Key ProductCache::key(Vec3 n, Vec3 wo, const BsdfProxy& proxy) con
   std::uint32_t q[4] = {};
   for (int i = 0; i < 4; ++i) q[i] = sum > 0 && std::isfinite(sum) ? weight_steps(w[i], sum) : 0;
   // A lobe's roughness (and the refraction's IOR) only count when the lobe does: one key for the rest.
+  // Without a glossy lobe the proxy depends on wo only through its side of the surface (which way the
+  // cosine lobes face): the key takes the normal on that side for wo, so a flat diffuse floor's hits
+  // share one key whatever the view.
+  const bool glossy = q[2] || q[3];
+  k.wo = lattice_point(glossy ? wo : dot(n, wo) < 0 ? -n : n, options_.resolution);
   const std::uint32_t ar = q[2] ? alpha_steps(proxy.alpha_reflection) : 0;
   const std::uint32_t at = q[3] ? alpha_steps(proxy.alpha_refraction) : 0;
   const std::uint32_t ior = q[3] ? ior_steps(proxy.ior) : ior_steps(1.0f);

@@ -122,6 +122,44 @@ TEST(ProductCache, CachedSamplerPassesChiSquare) {
   EXPECT_GE(cache.hits(), points.size());
 }
 
+// A proxy without reflection or refraction is the same for every view on one side of the surface: one
+// key serves every wo on that side, and its distribution is the one prepared with the actual wo.
+TEST(ProductCache, DiffuseProxiesShareOneKeyPerSide) {
+  const ImportanceTable table(synthetic_sky(256, 128), refined_table());
+  const ProductSamplerOptions so = refined_sampler();
+  ProductCache cache(table, so, {64, 16});
+  ProductSampler fresh(table, so);
+  std::mt19937_64 rng(23);
+  const Vec3 n = normalize(Vec3{0.3f, -0.2f, 0.9f});
+  for (const bool translucent : {false, true}) {
+    BsdfProxy proxy;
+    proxy.add_diffuse(0.8f);
+    if (translucent) proxy.add_translucent(0.3f);
+    const std::uint64_t misses = cache.misses();
+    for (int i = 0; i < 200; ++i) {
+      Vec3 wo = random_direction(rng);
+      while (std::fabs(dot(n, wo)) < 0.05f) wo = random_direction(rng);  // the rounded n on wo's side too
+      const bool below = i % 2 == 1;  // alternate sides: two keys, each prepared once
+      if ((dot(n, wo) < 0) != below) wo = -wo;
+      const ProductSampler& s = cache.prepare(n, wo, proxy);
+      const ProductCache::Rounded r = cache.round(n, wo, proxy);
+      ASSERT_TRUE(fresh.prepare(r.n, wo, r.proxy));  // the actual view, at the rounded normal
+      for (int c = 0; c < table.cell_count(); ++c)
+        ASSERT_NEAR(s.cell_probability(c), fresh.cell_probability(c), 1e-6f + 1e-5f * fresh.cell_probability(c))
+            << "point " << i << " cell " << c << (below ? " below" : " above") << (translucent ? ", translucent" : "");
+    }
+    EXPECT_EQ(cache.misses() - misses, 2u) << (translucent ? "translucent" : "diffuse");
+  }
+  // A glossy lobe makes the key depend on the view again.
+  BsdfProxy glossy;
+  glossy.add_diffuse(0.5f);
+  glossy.add_reflection(0.5f, 0.2f);
+  const std::uint64_t misses = cache.misses();
+  cache.prepare(n, normalize(Vec3{0, 0, 1}), glossy);
+  cache.prepare(n, normalize(Vec3{0.5f, 0, 1}), glossy);
+  EXPECT_EQ(cache.misses() - misses, 2u);
+}
+
 TEST(ProductCache, InvalidPointsAndProxies) {
   const ImportanceTable table(synthetic_sky(64, 32));
   ProductCache cache(table);

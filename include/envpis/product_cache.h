@@ -9,7 +9,10 @@
 //     degree at the default K = 64). No trigonometry: the key costs a few multiplications;
 //   - the proxy's four lobe weights as fractions of their sum, rounded to 1/255 (a positive weight
 //     keeps at least 1/255, so no lobe disappears); its two roughnesses, rounded in sqrt(alpha) to
-//     1/255 (alpha above 1 counts as 1); its IOR, rounded in log2 to 1/64 (clamped to [1/16, 16]).
+//     1/255 (alpha above 1 counts as 1); its IOR, rounded in log2 to 1/64 (clamped to [1/16, 16]);
+//   - a proxy with neither reflection nor refraction (diffuse, translucent) is the same for every wo
+//     on one side of the surface, so its key holds n or -n, whichever is on wo's side, in place of wo:
+//     the hits of a flat diffuse surface share one key whatever the view.
 // A shading point whose key is already prepared reuses that sampler; otherwise the least recently
 // used slot is prepared for the new key.
 //
