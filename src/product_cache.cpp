@@ -16,12 +16,14 @@ constexpr float kIorOctaves = 4.0f;  // IOR clamped to [2^-4, 2^4]
 // A direction's lattice point: each component of the unit direction rounded to a multiple of 1/K,
 // packed as three 13-bit fields (|component| <= K < 4096). Inline: the key's two run in parallel.
 inline __attribute__((always_inline)) std::uint64_t lattice_point(Vec3 d, int k) {
-  const Vec3 u = normalize(d);
   const float K = float(k);
+  const float scale = K / std::sqrt(dot(d, d));  // one division for the three components
   // c K + K + 1/2 >= 0, so the conversion's truncation rounds to nearest (lround is a library call);
   // through int32, which converts in one instruction (uint64 does not without AVX-512).
-  auto field = [&](float c) { return std::uint64_t(static_cast<std::uint32_t>(static_cast<std::int32_t>(c * K + K + 0.5f)) & 0x1fffu); };
-  return field(u.x) | field(u.y) << 13 | field(u.z) << 26;
+  auto field = [&](float c) {
+    return std::uint64_t(static_cast<std::uint32_t>(static_cast<std::int32_t>(c * scale + K + 0.5f)) & 0x1fffu);
+  };
+  return field(d.x) | field(d.y) << 13 | field(d.z) << 26;
 }
 Vec3 lattice_direction(std::uint64_t p, int k) {
   auto component = [&](int shift) { return float(static_cast<long>((p >> shift) & 0x1fff) - k); };
