@@ -38,14 +38,17 @@ inline Lanes4 row_lanes(const float* row, int w) {  // w a multiple of 4
   for (int k = 4; k < w; k += 4) a += load4(row + k);
   return a;
 }
-inline float lanes_total(Lanes4 a) { return (a[0] + a[1]) + (a[2] + a[3]); }
-// lanes_total of four rows' lanes, as one vector: a transpose, then the same two adds.
+// Four rows' totals from their lanes, as one vector: a transpose, then row_total's (a0 + a1) + (a2 + a3).
 inline Lanes4 four_totals(Lanes4 a, Lanes4 b, Lanes4 c, Lanes4 d) {
-  const Lanes4 ab_lo = __builtin_shufflevector(a, b, 0, 4, 1, 5), ab_hi = __builtin_shufflevector(a, b, 2, 6, 3, 7);
-  const Lanes4 cd_lo = __builtin_shufflevector(c, d, 0, 4, 1, 5), cd_hi = __builtin_shufflevector(c, d, 2, 6, 3, 7);
-  const Lanes4 l0 = __builtin_shufflevector(ab_lo, cd_lo, 0, 1, 4, 5), l1 = __builtin_shufflevector(ab_lo, cd_lo, 2, 3, 6, 7);
-  const Lanes4 l2 = __builtin_shufflevector(ab_hi, cd_hi, 0, 1, 4, 5), l3 = __builtin_shufflevector(ab_hi, cd_hi, 2, 3, 6, 7);
-  return (l0 + l1) + (l2 + l3);
+  const Lanes4 ab_lo = __builtin_shufflevector(a, b, 0, 4, 1, 5);
+  const Lanes4 ab_hi = __builtin_shufflevector(a, b, 2, 6, 3, 7);
+  const Lanes4 cd_lo = __builtin_shufflevector(c, d, 0, 4, 1, 5);
+  const Lanes4 cd_hi = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+  const Lanes4 lane0 = __builtin_shufflevector(ab_lo, cd_lo, 0, 1, 4, 5);  // lane 0 of a, b, c, d
+  const Lanes4 lane1 = __builtin_shufflevector(ab_lo, cd_lo, 2, 3, 6, 7);
+  const Lanes4 lane2 = __builtin_shufflevector(ab_hi, cd_hi, 0, 1, 4, 5);
+  const Lanes4 lane3 = __builtin_shufflevector(ab_hi, cd_hi, 2, 3, 6, 7);
+  return (lane0 + lane1) + (lane2 + lane3);
 }
 }  // namespace
 
@@ -78,8 +81,8 @@ float DiscreteDistribution2D::accumulate_rows_of(OnRow on_row) const {
       for (int k = 0; k < 4; ++k) on_row(r + k, t[k], run += t[k]);
     }
   }
-  for (; r < h_; ++r, m += stride) {
-    const float t = w % 4 == 0 ? lanes_total(row_lanes(m, w)) : row_total(m, w);
+  for (; r < h_; ++r, m += stride) {  // the rows left over: row_total's sums are four_totals' (above)
+    const float t = row_total(m, w);
     on_row(r, t, run += t);
   }
   return run;

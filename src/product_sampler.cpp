@@ -95,10 +95,10 @@ bool ProductSampler::prepare(Vec3 n, Vec3 wo, const BsdfProxy& proxy, const Port
       const float* v = view_->cell_fractions();
       for (int c = 0; c < cells; ++c) prob[c] *= v[c];
     }
-    if (refine_ && options_.refine_cells > 0) reestimate_heaviest_cells();
+    if (refine_) reestimate_heaviest_cells();
     // The kernel's total holds unless a pass above changed the weights; the row sums only once, after
     // the last pass below (update()).
-    if (view_ || (refine_ && options_.refine_cells > 0)) sum = top_.sum();
+    if (view_ || !slotted_.empty()) sum = top_.sum();
     seen = DiscreteDistribution2D::valid_total(sum);
   }
   // Nothing the proxy can see: environment only. A total below FLT_MIN (denormal lobe weights) counts
@@ -149,7 +149,7 @@ float ProductSampler::weigh_subcells(int c, DiscreteDistribution2D& out) const {
   float masked[64];
   if (view_ && mask_subcells(c, cells.prob, w, masked)) {
     env = masked;
-    sum = out.sum();  // the row sums only once, after the floor
+    sum = out.sum();  // the masked weights' total (the kernel's is unmasked); the row sums after the floor
   }
   if (!DiscreteDistribution2D::valid_total(sum)) {
     std::copy(env, env + n, w);
