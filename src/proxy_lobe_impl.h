@@ -111,7 +111,7 @@ ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V 
 }
 
 // Returns the weights' total, summed in the lanes as they are written: the sampler needs it for the
-// floor, and a second pass over the weights (DiscreteDistribution2D::sum) cost as much as the kernel.
+// floor, and this spares it a second pass over the weights (DiscreteDistribution2D::sum) per shading point.
 template <class V, bool kTransmission, bool kDiffuse, bool kMoments>
 ENVPIS_INLINE float product_weights_impl(const CellArrays& cells, const LobeParams& p, float* out) {
   constexpr std::size_t W = lanes<V>();
