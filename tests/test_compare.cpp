@@ -194,6 +194,8 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --clamp-direct nan" + o, "--clamp-direct: expected a finite number, got 'nan'"},
       {"compare --clamp-indirect inf" + o, "--clamp-indirect: expected a finite number, got 'inf'"},
       {"compare --caustics glossy" + o, "--caustics: unknown caustics 'glossy'"},
+      {"compare --product-compensation sometimes" + o,
+       "--product-compensation: unknown product compensation 'sometimes' (expected off, elsewhere, deeper, on or auto)"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
@@ -234,6 +236,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   ASSERT_TRUE(m["overhead"].is_object());
   EXPECT_EQ(m["regularized"], false);
   EXPECT_EQ(m["regularization"]["caustics"], "reflective,refractive");
+  EXPECT_EQ(m["product_options"]["compensation"], "deeper") << "auto, direct light";
   EXPECT_GT(m["overhead"]["ratio"].get<double>(), 0);
   ASSERT_EQ(m["regions"].size(), 8u) << "fig1: one region per sphere";
   EXPECT_EQ(m["regions"][0]["name"], "conductor-0.02");
@@ -332,6 +335,33 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
       std::ifstream(out / "metrics.json") >> m3;
       EXPECT_FALSE(m3["reference"]["cached"].get<bool>()) << lookup;
     }
+  }
+  fs::remove_all(out, ec);
+  fs::remove_all(cache, ec);
+}
+
+// --product-compensation auto (the default) resolves by the integrator: the compensated product at
+// every vertex along paths, the plain product at a camera ray's hit with direct light (docs/assets.md,
+// "`auto`"); an explicit value is kept with either.
+TEST_F(CompareCommand, ProductCompensationAutoFollowsTheIntegrator) {
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = fs::temp_directory_path() / ("envpis-test-compare-comp-" + pid);
+  const fs::path cache = fs::temp_directory_path() / ("envpis-test-compare-comp-cache-" + pid);
+  std::error_code ec;
+  const std::string common = "compare --scene fig1 --width 16 --height 4 --spp 1 --ref-spp 4 --strategies product "
+                             "--repeats 1 --no-convergence --no-plots --no-analysis --quiet --cache-dir '" +
+                             cache.string() + "' --out '" + out.string() + "'";
+  const std::vector<std::pair<std::string, std::string>> cases{{"--integrator path", "on"},
+                                                               {"--integrator direct", "deeper"},
+                                                               {"--integrator path --product-compensation deeper", "deeper"},
+                                                               {"--integrator direct --product-compensation on", "on"}};
+  for (const auto& [args, expected] : cases) {
+    fs::remove_all(out, ec);
+    const CmdResult r = run(common + " " + args);
+    ASSERT_EQ(r.code, 0) << args << ": " << r.output;
+    json m;
+    std::ifstream(out / "metrics.json") >> m;
+    EXPECT_EQ(m["product_options"]["compensation"], expected) << args;
   }
   fs::remove_all(out, ec);
   fs::remove_all(cache, ec);

@@ -170,8 +170,8 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product: which distributions use the MIS-compensated table (max(0, importance - mean), as "
                  "mis-comp's): off (none), elsewhere (the vertices without the product sample mis-comp's "
                  "table instead of mis's), deeper (those and the product's environment factor below a camera "
-                 "ray's hit) or on (at every vertex)")
-      ->type_name("off|elsewhere|deeper|on")
+                 "ray's hit), on (at every vertex) or auto: on with the path integrator, deeper with the direct one")
+      ->type_name("off|elsewhere|deeper|on|auto")
       ->capture_default_str();
   sub.add_option("--product-max-roughness", product_max_roughness,
                  "product: the product distribution only at vertices with a reflection or refraction lobe "
@@ -294,8 +294,18 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   if (product_max_roughness != "inf")
     o.product_max_roughness = static_cast<float>(
         parse_number_in("--product-max-roughness", product_max_roughness, 0, 1, "in [0, 1] or inf"));
-  o.product_compensation =
-      with_option("--product-compensation", [&] { return parse_product_compensation(product_compensation); });
+  // auto: measured per integrator (docs/assets.md, "`auto`: the compensated product along paths").
+  o.product_compensation = with_option("--product-compensation", [&] {
+    if (product_compensation == "auto")
+      return o.integrator == render::IntegratorKind::Path ? render::ProductCompensation::On
+                                                          : render::ProductCompensation::Deeper;
+    try {
+      return parse_product_compensation(product_compensation);
+    } catch (const Error&) {
+      throw Error("unknown product compensation '" + product_compensation +
+                  "' (expected off, elsewhere, deeper, on or auto)");
+    }
+  });
   o.product_cache.resolution =
       static_cast<int>(parse_integer("--product-cache-resolution", product_cache_resolution, 1, 4095));
   o.product_cache_step = static_cast<float>(

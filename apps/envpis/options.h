@@ -63,7 +63,7 @@ struct SceneOptionArgs {
   std::string product_cache = "16", product_cache_resolution = "64", product_depth = "0";
   std::string product_cache_step = "0.03125";
   std::string product_max_roughness = "0.5";  // docs/assets.md, "by the vertex's material"
-  std::string product_compensation = "deeper";  // docs/assets.md, "The product and the compensated table"
+  std::string product_compensation = "auto";  // docs/assets.md, "`auto`: the compensated product along paths"
   // Path regularization (render/regularization.h): Cycles' clamp, caustics and filter glossy; off.
   std::string clamp_direct = "0", clamp_indirect = "0", caustics = "reflective,refractive", filter_glossy = "0";
 

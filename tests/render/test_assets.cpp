@@ -497,7 +497,7 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
   std::vector<Strategy> strategies;
   for (Strategy s : all_strategies())
     if (s != Strategy::Env) strategies.push_back(s);
-  const int tests = static_cast<int>((strategies.size() + 3) * objects.size());
+  const int tests = static_cast<int>((strategies.size() + 5) * objects.size());
   const double alpha = 1e-3 / tests;
   double z_max = 0;
   for (double lo = 0, hi = 10, i = 0; i < 100; ++i, z_max = lo) {
@@ -511,6 +511,7 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
     int cache_entries, product_depth;
     std::string label;
     float max_roughness = kInfinity;
+    ProductCompensation compensation = ProductCompensation::Off;
   };
   std::vector<Variant> variants;
   for (Strategy s : strategies) variants.push_back({s, 16, 0, to_string(s)});
@@ -518,11 +519,17 @@ TEST(AssetConvergence, EveryStrategyMatchesTheReferencePerObject) {
   variants.push_back({Strategy::Product, 16, 1, "product at depth 0 only"});
   // Product at glossy vertices only (the coats, alpha 1e-3) and the table's at the rest.
   variants.push_back({Strategy::Product, 16, 0, "product at alpha <= 0.1 only", 0.1f});
+  // The envpis command's default along paths (--product-compensation auto): the compensated product at
+  // every vertex, and below a camera ray's hit only (deeper).
+  variants.push_back({Strategy::Product, 16, 0, "compensated product", kInfinity, ProductCompensation::On});
+  variants.push_back({Strategy::Product, 16, 0, "compensated product below the first hit", 0.5f,
+                      ProductCompensation::Deeper});
   for (const Variant& v : variants) {
     RenderOptions o = options(v.strategy, v.strategy == Strategy::Oracle ? 32 : 128, 42);
     o.product_cache.entries = v.cache_entries;
     o.product_depth = v.product_depth;
     o.product_max_roughness = v.max_roughness;
+    o.product_compensation = v.compensation;
     const RenderResult r = render(scene, o);
     ASSERT_EQ(r.nonfinite_pixels, 0u) << v.label;
     const auto m = object_means(r, n);
