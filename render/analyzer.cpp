@@ -310,7 +310,8 @@ Analyzer::Analyzer(const Scene& scene, const AnalyzerOptions& options, const Str
   auto wants = [&](Strategy s) {
     return std::find(options_.strategies.begin(), options_.strategies.end(), s) != options_.strategies.end();
   };
-  const bool own_product = wants(Strategy::Product) && options_.product_compensation == ProductCompensation::On;
+  const bool own_product = wants(Strategy::Product) &&
+                           compensation_for(options_.product_compensation, Strategy::Product) == ProductCompensation::On;
   std::vector<Strategy> built{Strategy::Mis};
   if (wants(Strategy::MisComp)) built.push_back(Strategy::MisComp);
   if (own_product) built.push_back(Strategy::Product);  // its own, compensated table

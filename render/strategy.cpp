@@ -73,7 +73,8 @@ ProductCompensation parse_product_compensation(const std::string& s) {
   if (s == "elsewhere") return ProductCompensation::Elsewhere;
   if (s == "deeper") return ProductCompensation::Deeper;
   if (s == "on") return ProductCompensation::On;
-  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere, deeper or on)");
+  if (s == "on-without-portals") return ProductCompensation::OnWithoutPortals;
+  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere, deeper, on or on-without-portals)");
 }
 
 const char* to_string(ProductCompensation c) {
@@ -82,6 +83,7 @@ const char* to_string(ProductCompensation c) {
     case ProductCompensation::Elsewhere: return "elsewhere";
     case ProductCompensation::Deeper: return "deeper";
     case ProductCompensation::On: return "on";
+    case ProductCompensation::OnWithoutPortals: return "on-without-portals";
   }
   return "off";
 }
@@ -95,6 +97,12 @@ bool second_table(ProductCompensation c) {
 
 ProductCompensation tables_compensation(ProductCompensation c, bool deeper_vertices, int cache_entries) {
   return second_table(c) && !deeper_vertices && cache_entries > 0 ? ProductCompensation::Off : c;
+}
+
+ProductCompensation compensation_for(ProductCompensation c, Strategy s) {
+  if (base_strategy(s) != Strategy::Product) return ProductCompensation::Off;
+  if (c == ProductCompensation::OnWithoutPortals) return uses_portals(s) ? ProductCompensation::Off : ProductCompensation::On;
+  return c;
 }
 
 namespace {
@@ -113,7 +121,7 @@ TablePlan plan_tables(Strategy strategy, const OracleOptions& oracle, const Prod
   t.strategy = strategy;
   t.oracle = oracle;
   t.product = product;
-  t.product_compensation = base_strategy(strategy) == Strategy::Product ? product_compensation : ProductCompensation::Off;
+  t.product_compensation = compensation_for(product_compensation, strategy);
   if (strategy == Strategy::Oracle) {
     if (oracle.resolution < 1 || oracle.resolution > 256)
       throw Error("oracle resolution must be in 1..256, got " + std::to_string(oracle.resolution));

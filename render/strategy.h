@@ -66,9 +66,11 @@ const char* to_string(Heuristic h);
 /// instead of mis's. Deeper: those and the product's environment factor at the vertices after a
 /// camera ray's hit (depth >= 1); the camera ray's hit keeps the plain product. On: the product's
 /// environment factor at every vertex too. product-portal: its masked environment and its product
-/// share one table, so only On changes it (both compensated).
-enum class ProductCompensation { Off, Elsewhere, Deeper, On };
-/// "off" | "elsewhere" | "deeper" | "on"
+/// share one table, so only On changes it (both compensated). OnWithoutPortals: On for product,
+/// Off for product-portal, which lost with the compensated table in the two-window room along paths
+/// (docs/assets.md, "`auto`").
+enum class ProductCompensation { Off, Elsewhere, Deeper, On, OnWithoutPortals };
+/// "off" | "elsewhere" | "deeper" | "on" | "on-without-portals"
 ProductCompensation parse_product_compensation(const std::string& s);
 const char* to_string(ProductCompensation c);
 /// The compensation to build a render's tables with: Elsewhere and Deeper build a second table for the
@@ -77,6 +79,9 @@ const char* to_string(ProductCompensation c);
 /// vertices (the direct integrator) would never sample that table: Off then, the same images without
 /// its build. Anything else is returned as it is.
 ProductCompensation tables_compensation(ProductCompensation c, bool deeper_vertices, int cache_entries);
+/// What `c` means for strategy s: Off for the strategies without a product, OnWithoutPortals as On or
+/// Off (product, product-portal), anything else as it is.
+ProductCompensation compensation_for(ProductCompensation c, Strategy s);
 
 /// The oracle's cost per shading point is about bsdf_samples + directions * (usable cells) + 16 per
 /// cell on the horizon + refine_points evaluations of the BSDF and its pdf (render/oracle.h).

@@ -195,7 +195,7 @@ TEST_F(CompareCommand, RejectsBadOptionsWithOneLineErrors) {
       {"compare --clamp-indirect inf" + o, "--clamp-indirect: expected a finite number, got 'inf'"},
       {"compare --caustics glossy" + o, "--caustics: unknown caustics 'glossy'"},
       {"compare --product-compensation sometimes" + o,
-       "--product-compensation: unknown product compensation 'sometimes' (expected off, elsewhere, deeper, on or auto)"},
+       "--product-compensation: unknown product compensation 'sometimes' (expected off, elsewhere, deeper, on, on-without-portals or auto)"},
       {"compare", "--out is required"},
       {"compare --out /proc/envpis-cannot-write", "--out"},
   };
@@ -351,7 +351,7 @@ TEST_F(CompareCommand, ProductCompensationAutoFollowsTheIntegrator) {
   const std::string common = "compare --scene fig1 --width 16 --height 4 --spp 1 --ref-spp 4 --strategies product "
                              "--repeats 1 --no-convergence --no-plots --no-analysis --quiet --cache-dir '" +
                              cache.string() + "' --out '" + out.string() + "'";
-  const std::vector<std::pair<std::string, std::string>> cases{{"--integrator path", "on"},
+  const std::vector<std::pair<std::string, std::string>> cases{{"--integrator path", "on-without-portals"},
                                                                {"--integrator direct", "deeper"},
                                                                {"--integrator path --product-compensation deeper", "deeper"}};
   for (const auto& [args, expected] : cases) {

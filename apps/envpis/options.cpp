@@ -170,8 +170,9 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
                  "product: which distributions use the MIS-compensated table (max(0, importance - mean), as "
                  "mis-comp's): off (none), elsewhere (the vertices without the product sample mis-comp's "
                  "table instead of mis's), deeper (those and the product's environment factor below a camera "
-                 "ray's hit), on (at every vertex) or auto: on with the path integrator, deeper with the direct one")
-      ->type_name("off|elsewhere|deeper|on|auto")
+                 "ray's hit), on (at every vertex), on-without-portals (on for product, off for product-portal) or "
+                 "auto: on-without-portals with the path integrator, deeper with the direct one")
+      ->type_name("off|elsewhere|deeper|on|on-without-portals|auto")
       ->capture_default_str();
   sub.add_option("--product-max-roughness", product_max_roughness,
                  "product: the product distribution only at vertices with a reflection or refraction lobe "
@@ -297,13 +298,13 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
   // auto: measured per integrator (docs/assets.md, "`auto`: the compensated product along paths").
   o.product_compensation = with_option("--product-compensation", [&] {
     if (product_compensation == "auto")
-      return o.integrator == render::IntegratorKind::Path ? render::ProductCompensation::On
+      return o.integrator == render::IntegratorKind::Path ? render::ProductCompensation::OnWithoutPortals
                                                           : render::ProductCompensation::Deeper;
     try {
       return parse_product_compensation(product_compensation);
     } catch (const Error&) {
       throw Error("unknown product compensation '" + product_compensation +
-                  "' (expected off, elsewhere, deeper, on or auto)");
+                  "' (expected off, elsewhere, deeper, on, on-without-portals or auto)");
     }
   });
   o.product_cache.resolution =

@@ -360,6 +360,21 @@ TEST(LightSampler, TablesCompensationDropsOnlyTheUnsampledSecondTable) {
   EXPECT_EQ(tables_compensation(PC::Off, true, 0), PC::Off);
 }
 
+// on-without-portals (the envpis command's default along paths) is On for product and Off for
+// product-portal; the strategies without a product never get a compensation; names round-trip.
+TEST(LightSampler, CompensationForEachStrategy) {
+  using PC = ProductCompensation;
+  EXPECT_EQ(compensation_for(PC::OnWithoutPortals, Strategy::Product), PC::On);
+  EXPECT_EQ(compensation_for(PC::OnWithoutPortals, Strategy::ProductPortal), PC::Off);
+  EXPECT_EQ(compensation_for(PC::On, Strategy::ProductPortal), PC::On);
+  EXPECT_EQ(compensation_for(PC::Deeper, Strategy::Product), PC::Deeper);
+  for (Strategy s : {Strategy::Mis, Strategy::MisComp, Strategy::MisPortal, Strategy::Oracle})
+    EXPECT_EQ(compensation_for(PC::On, s), PC::Off) << to_string(s);
+  for (PC c : {PC::Off, PC::Elsewhere, PC::Deeper, PC::On, PC::OnWithoutPortals})
+    EXPECT_EQ(parse_product_compensation(to_string(c)), c) << to_string(c);
+  EXPECT_THROW(parse_product_compensation("auto"), Error);  // the command's, resolved by the integrator
+}
+
 // product with --product-max-roughness: the distribution a vertex draws its light sample from is the
 // one pdf() gives the BSDF sample's MIS weight at that vertex, product's at glossy vertices and the
 // table's elsewhere (mis's, or mis-comp's with compensation), also when glossy and other vertices
