@@ -87,8 +87,9 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product && base.product_depth > 0) key["product_depth"] = base.product_depth;
   if (strategy == Strategy::Product && base.product_max_roughness < render::kInfinity)
     key["product_max_roughness"] = base.product_max_roughness;
-  if (strategy == Strategy::Product && base.product_compensation != render::ProductCompensation::Off)
-    key["product_compensation"] = to_string(base.product_compensation);
+  // What this variant's tables get (on-without-portals: on for product, off for product-portal).
+  const render::ProductCompensation compensation = render::compensation_for(base.product_compensation, variant);
+  if (compensation != render::ProductCompensation::Off) key["product_compensation"] = to_string(compensation);
 }
 
 }  // namespace
