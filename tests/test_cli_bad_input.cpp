@@ -390,6 +390,29 @@ TEST_F(BadInput, UnwritableOutputs) {
   expect_one_line_errors(cases);
 }
 
+// Commands that fail after checking --out leave no file there, even when several run at once on the
+// same path (the check once created and removed a probe file, and two such checks could leave one behind),
+// and a file that was there is left as it was.
+TEST_F(BadInput, FailedRendersLeaveTheOutputAsItWas) {
+  const std::string good = shell_quote(path("good.exr"));
+  for (const bool existed : {false, true}) {
+    const std::string out = path(existed ? "out/kept.exr" : "out/none.exr");
+    if (existed) std::ofstream(out) << "earlier";
+    std::vector<std::pair<std::string, std::string>> cases;
+    for (int i = 0; i < 24; ++i)
+      cases.push_back({"render --env " + good + " --out " + shell_quote(out) + " --scene no-such-scene",
+                       "no-such-scene"});
+    expect_one_line_errors(cases, 8);
+    if (!existed) {
+      EXPECT_FALSE(fs::exists(out));
+      continue;
+    }
+    std::ifstream in(out);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_EQ(text, "earlier");
+  }
+}
+
 // Invalid values of the options every map-reading command shares.
 TEST_F(BadInput, InvalidMapOptions) {
   const std::string good = shell_quote(path("good.exr"));

@@ -10,6 +10,9 @@
 #include <cstring>
 #include <filesystem>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #ifdef ENVPIS_HAVE_RENDER
 #include "render/scenes.h"
 #endif
@@ -61,13 +64,25 @@ void check_writable_file(const std::string& path, const std::string& option) {
   const fs::path p(path);
   if (p.filename().empty()) throw Error(option + ": '" + path + "' is not a file name");
   std::error_code ec;
-  const bool existed = fs::exists(p, ec);
-  if (existed && fs::is_directory(p, ec)) throw Error(option + ": '" + path + "' is a directory");
-  errno = 0;
-  std::FILE* f = std::fopen(path.c_str(), "ab");
-  if (!f) throw Error("cannot write " + option + " '" + path + "': " + std::strerror(errno));
-  std::fclose(f);
-  if (!existed) fs::remove(p, ec);
+  if (fs::is_directory(p, ec)) throw Error(option + ": '" + path + "' is a directory");
+  // Create exclusively, so only a file this call made is removed: with "exists? create, remove" two
+  // commands writing the same path at once could leave an empty file behind (seen in CI).
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0) {
+      ::close(fd);
+      ::unlink(path.c_str());
+      return;
+    }
+    if (errno != EEXIST) break;
+    fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);  // there already: writable, left untouched
+    if (fd >= 0) {
+      ::close(fd);
+      return;
+    }
+    if (errno != ENOENT) break;  // ENOENT: removed meanwhile by another writer, try again
+  }
+  throw Error("cannot write " + option + " '" + path + "': " + std::strerror(errno));
 }
 
 #ifdef ENVPIS_HAVE_RENDER
