@@ -68,13 +68,26 @@ Heuristic parse_heuristic(const std::string& s) {
 
 const char* to_string(Heuristic h) { return h == Heuristic::Power ? "power" : "balance"; }
 
+namespace {
+constexpr ProductCompensation kCompensations[] = {ProductCompensation::Off, ProductCompensation::Elsewhere,
+                                                  ProductCompensation::Deeper, ProductCompensation::On,
+                                                  ProductCompensation::OnWithoutPortals};
+}  // namespace
+
+std::string product_compensation_names(const std::string& last) {
+  std::string list;
+  for (ProductCompensation c : kCompensations) list += std::string(list.empty() ? "" : ", ") + to_string(c);
+  if (last.empty()) {
+    const std::size_t comma = list.rfind(", ");
+    return list.substr(0, comma) + " or " + list.substr(comma + 2);
+  }
+  return list + " or " + last;
+}
+
 ProductCompensation parse_product_compensation(const std::string& s) {
-  if (s == "off") return ProductCompensation::Off;
-  if (s == "elsewhere") return ProductCompensation::Elsewhere;
-  if (s == "deeper") return ProductCompensation::Deeper;
-  if (s == "on") return ProductCompensation::On;
-  if (s == "on-without-portals") return ProductCompensation::OnWithoutPortals;
-  throw Error("unknown product compensation '" + s + "' (expected off, elsewhere, deeper, on or on-without-portals)");
+  for (ProductCompensation c : kCompensations)
+    if (s == to_string(c)) return c;
+  throw Error("unknown product compensation '" + s + "' (expected " + product_compensation_names() + ")");
 }
 
 const char* to_string(ProductCompensation c) {

@@ -73,6 +73,9 @@ enum class ProductCompensation { Off, Elsewhere, Deeper, On, OnWithoutPortals };
 /// "off" | "elsewhere" | "deeper" | "on" | "on-without-portals"
 ProductCompensation parse_product_compensation(const std::string& s);
 const char* to_string(ProductCompensation c);
+/// Every value's name for an error message, "off, elsewhere, ... or on-without-portals"; with `last`
+/// (a front end's own value, such as "auto") every name, then "or last".
+std::string product_compensation_names(const std::string& last = "");
 /// The compensation to build a render's tables with: Elsewhere and Deeper build a second table for the
 /// vertices after a camera ray's hit and the vertices without the product, and with the product cache
 /// (cache_entries > 0) every camera ray's hit takes the plain product, so a render without deeper

@@ -318,8 +318,8 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
     try {
       return parse_product_compensation(product_compensation);
     } catch (const Error&) {
-      throw Error("unknown product compensation '" + product_compensation +
-                  "' (expected off, elsewhere, deeper, on, on-without-portals or auto)");
+      throw Error("unknown product compensation '" + product_compensation + "' (expected " +
+                  render::product_compensation_names("auto") + ")");
     }
   });
   o.product_cache.resolution =
