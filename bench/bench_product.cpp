@@ -135,6 +135,18 @@ void BM_ProductPrepareAndSample_Refined_Moments(benchmark::State& state) {
   product_prepare_and_sample(state, sunset_table_subcells(), opt, to_string(bench_simd()));
 }
 
+// The renderer's configuration (refined, moments, floor 0.2) with each reflection lobe: the argument is
+// ReflectionLobe (0 mirror, 1 half-vector).
+void BM_ProductPrepareAndSample_ReflectionLobe(benchmark::State& state) {
+  ProductSamplerOptions opt;
+  opt.simd = bench_simd();
+  opt.refine = true;
+  opt.cell_estimate = CellEstimate::Moments;
+  opt.proxy.min_alpha = 0.2f;
+  opt.proxy.reflection_lobe = static_cast<ReflectionLobe>(state.range(0));
+  product_prepare_and_sample(state, sunset_table_subcells(), opt, to_string(opt.proxy.reflection_lobe));
+}
+
 // The weights kernel alone with the moments estimate (the widest set).
 void BM_ProductWeights_KernelBest_Moments(benchmark::State& state) {
   const ImportanceTable& table = sunset_table();
@@ -252,6 +264,7 @@ BENCHMARK(BM_ProductPrepareAndSample_SIMD);
 BENCHMARK(BM_ProductPrepareAndSample_Refined)->ArgName("refine_cells")->Arg(0)->Arg(8);
 BENCHMARK(BM_ProductPrepareAndSample_SIMD_Moments);
 BENCHMARK(BM_ProductPrepareAndSample_Refined_Moments);
+BENCHMARK(BM_ProductPrepareAndSample_ReflectionLobe)->ArgName("half_vector")->Arg(0)->Arg(1);
 BENCHMARK(BM_ProductWeights_KernelBest_Moments);
 BENCHMARK(BM_ProductSample);
 BENCHMARK(BM_ProductPdf);

@@ -58,6 +58,10 @@ void bind_bsdf_proxy(py::module_& m) {
           "transform", [](const ProxyOptions& o) { return envpis::to_string(o.transform); },
           [](ProxyOptions& o, const std::string& s) { o.transform = envpis::parse_roughness_transform(s); },
           "roughness transform: 'hybrid' (default), 'slides', 'abstract' or 'fitted'")
+      .def_property(
+          "reflection_lobe", [](const ProxyOptions& o) { return envpis::to_string(o.reflection_lobe); },
+          [](ProxyOptions& o, const std::string& s) { o.reflection_lobe = envpis::parse_reflection_lobe(s); },
+          "reflection lobe: 'mirror' (default) or 'half-vector' (docs/proxy.md)")
       .def_readwrite("min_alpha", &ProxyOptions::min_alpha, "floor on the transformed roughness (0 disables)")
       .def_readwrite("max_alpha", &ProxyOptions::max_alpha, "cap on the transformed roughness (1 disables)");
 }

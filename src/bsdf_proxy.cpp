@@ -54,6 +54,14 @@ const char* to_string(RoughnessTransform t) {
   return "?";
 }
 
+ReflectionLobe parse_reflection_lobe(const std::string& s) {
+  if (s == "mirror") return ReflectionLobe::Mirror;
+  if (s == "half-vector") return ReflectionLobe::HalfVector;
+  throw Error("unknown reflection lobe '" + s + "' (expected mirror or half-vector)");
+}
+
+const char* to_string(ReflectionLobe l) { return l == ReflectionLobe::HalfVector ? "half-vector" : "mirror"; }
+
 void BsdfProxy::add_diffuse(float w) {
   if (positive(w)) diffuse += w;
 }
@@ -159,7 +167,8 @@ PreparedProxy prepare_proxy(const BsdfProxy& proxy, Vec3 n, Vec3 wo, const Proxy
   float cap = options.max_alpha;
   if (!(cap <= 1.0f)) cap = 1.0f;  // NaN or above 1
   cap = std::max(cap, floor);      // a cap below the floor gives way to the floor
-  p.alpha_r = std::clamp(ar_t, floor, cap);
+  p.half_vector = options.reflection_lobe == ReflectionLobe::HalfVector;
+  p.alpha_r = p.half_vector ? std::min(std::sqrt(ar * ar + 0.25f * floor * floor), cap) : std::clamp(ar_t, floor, cap);
   p.alpha_t = std::clamp(at_t, floor, cap);
   p.kd = wd * kInvPi;
   p.kt = wt_diffuse * kInvPi;

@@ -45,6 +45,8 @@ struct CellArrays {
 struct LobeParams {
   float n[3], r[3], t[3];
   float kd, kt, cr, mr, ct, mt;
+  float co;     ///< N.wo (= N.R)
+  int half;     ///< the reflection lobe: 0 around R (c = R.wi), 1 GGX of the half-vector (c = N.h)
   int moments;  ///< 0: the cone-closest direction (the paper's), 1: the mean direction
 };
 

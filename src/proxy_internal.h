@@ -5,6 +5,8 @@
 #include "envpis/bsdf_proxy.h"
 #include "kernels.h"
 
+#include <algorithm>
+
 namespace envpis::detail {
 
 inline LobeParams to_lobe_params(const PreparedProxy& p) {
@@ -19,6 +21,10 @@ inline LobeParams to_lobe_params(const PreparedProxy& p) {
   l.mr = a2r - 1.0f;
   l.ct = p.wt * a2t * kInvPi;
   l.mt = a2t - 1.0f;
+  l.co = p.n.x * p.r.x + p.n.y * p.r.y + p.n.z * p.r.z;
+  l.half = p.half_vector;
+  // D(N.h) / (4 N.wo) integrates over wi to about 1, as the mirror lobe does (N.wo kept from 0).
+  if (l.half) l.cr = p.wr * a2r * kInvPi / (4.0f * std::max(l.co, 0.05f));
   l.moments = 0;
   return l;
 }

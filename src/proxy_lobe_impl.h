@@ -36,21 +36,39 @@ ENVPIS_INLINE V ggx_like(V c, V coef, V m) {
   return coef * vrcp_fast(d * d);
 }
 
+/// The half-vector lobe coef / (1 + m (N.h)^2)^2, h = (wo + w) / |wo + w|, for a direction w with N.w = cn
+/// and R.w = cr: wo.w = 2 co cn - cr (R = 2 co N - wo), so (N.h)^2 = (co + cn)^2 / (2 + 2 wo.w). Where
+/// N.h would be negative (w far below the horizon) it keeps its value at N.h = 0, the tail coef, as
+/// ggx_like does beyond 90 degrees. Written as coef s2^2 / (s2 + m nh^2)^2 with nh = N.(wo + w), s2 = |wo + w|^2, so that the one estimated
+/// reciprocal comes last: through (N.h)^2 its error would be multiplied by 1 / a^2 at the peak.
+template <class V>
+ENVPIS_INLINE V ggx_half(V cn, V cr, V co, V coef, V m) {
+  const V s2 = vmax(V(2.0f) + V(4.0f) * co * cn - V(2.0f) * cr, V(1e-6f));
+  const V nh = vmax(co + cn, V(0.0f));
+  const V d = s2 + m * vmin(nh * nh, s2);  // (N.h)^2 <= 1
+  const V q = s2 * vrcp_fast(d);
+  return coef * q * q;
+}
+
 /// E[max(0, X)] for X with mean m and variance v, as the smooth maximum (m + sqrt(m^2 + 2 v / pi)) / 2:
 /// exact for |m| >> sqrt(v) and at m = 0 for a normal X, never 0 while v > 0 (a cell straddling the
 /// horizon keeps a weight even when its mean is below it).
 template <class V>
 ENVPIS_INLINE V mean_positive_part(V m, V v) {
-  return V(0.5f) * (m + vsqrt_fast(m * m + v));
+  // For m < 0 as v / (2 (r - m)), r = sqrt(m^2 + v): the same value without the cancellation that
+  // would magnify the square root estimate's error.
+  const V r = vsqrt_fast(m * m + v);
+  return select(m >= V(0.0f), V(0.5f) * (m + r), V(0.5f) * v * vrcp_fast(r - m));
 }
 
 /// LobeParams broadcast to V.
 template <class V>
 struct LobeV {
-  V nx, ny, nz, rx, ry, rz, tx, ty, tz, kd, kt, cr, mr, ct, mt;
+  V nx, ny, nz, rx, ry, rz, tx, ty, tz, kd, kt, cr, mr, ct, mt, co;
+  bool half;
   explicit LobeV(const LobeParams& p)
       : nx(p.n[0]), ny(p.n[1]), nz(p.n[2]), rx(p.r[0]), ry(p.r[1]), rz(p.r[2]), tx(p.t[0]), ty(p.t[1]),
-        tz(p.t[2]), kd(p.kd), kt(p.kt), cr(p.cr), mr(p.mr), ct(p.ct), mt(p.mt) {}
+        tz(p.t[2]), kd(p.kd), kt(p.kt), cr(p.cr), mr(p.mr), ct(p.ct), mt(p.mt), co(p.co), half(p.half != 0) {}
 };
 
 /// The proxy's value for a cone (axis a, half-angle b): every lobe evaluated at the cone's direction
@@ -64,8 +82,19 @@ struct LobeV {
 template <class V, bool kTransmission = true, bool kDiffuse = true>
 ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
-  const V cR = closest_cos(l.rx * ax + l.ry * ay + l.rz * az, cb, sb);
-  V value = ggx_like(cR, l.cr, l.mr);
+  const V ca = l.rx * ax + l.ry * ay + l.rz * az;
+  V value;
+  if (l.half) {
+    // At the cone's direction closest to R: R itself inside the cone, else the axis turned by b towards
+    // R, whose N.w is (sin(t - b) N.a + sin b N.R) / sin t for t = angle(a, R).
+    // (Exact square root and division: near the peak the lobe magnifies errors in N.w by 1 / a^2.)
+    const V st = vsqrt(vmax(V(1.0f) - ca * ca, V(0.0f)));
+    const V cn_near = ((st * cb - ca * sb) * cn + sb * l.co) / vmax(st, V(1e-6f));
+    const auto inside = ca >= cb;
+    value = ggx_half(select(inside, l.co, cn_near), select(inside, V(1.0f), ca * cb + st * sb), l.co, l.cr, l.mr);
+  } else {
+    value = ggx_like(closest_cos(ca, cb, sb), l.cr, l.mr);
+  }
   V sn(0.0f);
   if constexpr (kDiffuse) {
     // N and -N make supplementary angles with the axis: one sine serves both.
@@ -90,7 +119,19 @@ ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb
 template <class V, bool kTransmission = true, bool kDiffuse = true>
 ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V mx, V my, V mz, V spread) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
-  V value = ggx_like(l.rx * mx + l.ry * my + l.rz * mz, l.cr, l.mr);
+  V value;
+  if (l.half) {
+    // The half-vector lobe at m, times the share of the cell above the horizon (N.w over the cell has
+    // mean (1 - s) N.m and spread about sqrt(s) sin(N, m): a linear ramp in between), at least 2%:
+    // unlike the mirror lobe it is large just below the horizon, where the light sample is wasted.
+    const V cm = l.nx * mx + l.ny * my + l.nz * mz;
+    // Exact square root and division: the ramp is a difference, which would magnify estimates' errors.
+    const V sd = vsqrt(spread * vmax(V(1.0f) - cm * cm, V(0.0f))) + V(1e-4f);
+    const V up = vmin(vmax(V(0.5f) + V(0.5f) * (V(1.0f) - spread) * cm / sd, V(0.0f)), V(1.0f));
+    value = ggx_half(cm, l.rx * mx + l.ry * my + l.rz * mz, l.co, l.cr, l.mr) * vmax(up, V(0.02f));
+  } else {
+    value = ggx_like(l.rx * mx + l.ry * my + l.rz * mz, l.cr, l.mr);
+  }
   V mean_cos(0.0f), var_cos(0.0f);
   if constexpr (kDiffuse) {
     // N.w over the cell: mean (1 - s) N.m exactly (N.w is linear in w); variance about s sin^2(N, m)

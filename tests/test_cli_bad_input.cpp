@@ -427,6 +427,7 @@ TEST_F(BadInput, InvalidMapOptions) {
     cases.push_back({base + " --proxy-min-alpha -0.5", "--proxy-min-alpha: must be in [0, 1]"});
     cases.push_back({base + " --proxy-max-alpha 1.5", "--proxy-max-alpha: must be in [0, 1], got '1.5'"});
     cases.push_back({base + " --proxy-transform wide", "--proxy-transform: unknown roughness transform 'wide'"});
+    cases.push_back({base + " --proxy-lobe half", "--proxy-lobe: unknown reflection lobe 'half' (expected mirror or half-vector)"});
     cases.push_back({base + " --oracle-dirs 5", "--oracle-dirs: must be a square number"});
     cases.push_back({base + " --top 12.5", "--top: expected an integer in 1..256, got '12.5'"});
     cases.push_back({base + " --threads -2", "--threads: must be in 0..4096, got '-2'"});

@@ -703,11 +703,15 @@ TEST(ProductSampler, MomentsChiSquareOverManyConfigurations) {
   int k = 0;
   for (const auto& [name, table] : tables) {
     // One-level and refined (on tables with sub-cells), alternating.
+    // Every third with the half-vector reflection lobe.
     ProductSampler one(*table, moments(false));
+    ProductSamplerOptions half_opt = moments(table->subdivision() > 1);
+    half_opt.proxy.reflection_lobe = ReflectionLobe::HalfVector;
+    ProductSampler half(*table, half_opt);
     std::unique_ptr<ProductSampler> two;
     if (table->subdivision() > 1) two = std::make_unique<ProductSampler>(*table, moments(true));
     for (const Config& c : random_configs(per_table, 500 + k)) {
-      ProductSampler& ps = two && k % 2 ? *two : one;
+      ProductSampler& ps = k % 3 == 2 ? half : two && k % 2 ? *two : one;
       ASSERT_TRUE(ps.prepare(c.n, c.wo, c.proxy)) << name << " " << c.label;
       const auto r = product_chi2(ps, 5000 + k++, tests);
       EXPECT_TRUE(r.passed) << name << " " << c.label << ": " << r.message;
@@ -780,17 +784,21 @@ TEST(ProductSampler, MomentsEstimateFollowsTheCellMassesBetter) {
   }
 }
 
+// Every kernel set gives the scalar kernels' weights, for both cell estimates and both reflection lobes.
 TEST(ProductSampler, MomentsKernelsMatchTheScalarKernels) {
   const std::vector<const detail::Kernels*> sets = detail::kernels_available();
   const detail::Kernels& ref = detail::kernels_scalar();
   for (const auto& [name, table] : all_tables()) {
     const detail::CellArrays cells = detail::cell_arrays(*table);
     std::vector<float> expected(cells.padded_count), got(cells.padded_count);
+    int i = 0;
     for (const Config& c : random_configs(30, 19)) {
-      const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo);
+      ProxyOptions po;  // both reflection lobes, both estimates
+      if (i % 2) po.reflection_lobe = ReflectionLobe::HalfVector;
+      const PreparedProxy pp = prepare_proxy(c.proxy, c.n, c.wo, po);
       ASSERT_TRUE(pp.valid());
       detail::LobeParams lobes = detail::to_lobe_params(pp);
-      lobes.moments = 1;
+      lobes.moments = i++ % 4 < 2;
       ref.product_weights(cells, lobes, expected.data());
       double total = 0;
       for (float w : expected) {

@@ -41,6 +41,7 @@ TEST(Sweep, ProductSamplerChiSquareOver1000Configurations) {
     opt.env_mix = U(rng) < 0.3f ? 0.1f : 0.0f;
     opt.proxy.transform = static_cast<RoughnessTransform>(rng() % 3);
     opt.proxy.min_alpha = U(rng) < 0.5f ? 0.35f : 0.0f;
+    if (U(rng) < 0.3f) opt.proxy.reflection_lobe = ReflectionLobe::HalfVector;
     ProductSampler ps(table, opt);
     BsdfProxy proxy;
     if (U(rng) < 0.6f) proxy.add_diffuse(U(rng));

@@ -116,6 +116,7 @@ void put_sampling_options(json& j, const CompareSession& session) {
   const RenderOptions& base = session.base;
   const Scene& scene = session.scene;
   j["product_options"] = {{"proxy_transform", static_cast<int>(base.product.proxy.transform)},
+                          {"proxy_lobe", to_string(base.product.proxy.reflection_lobe)},
                           {"proxy_min_alpha", base.product.proxy.min_alpha},
                           {"proxy_max_alpha", base.product.proxy.max_alpha},
                           {"env_mix", base.product.env_mix},

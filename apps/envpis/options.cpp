@@ -144,6 +144,11 @@ void SceneOptionArgs::add_sampling_options(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--proxy-transform", proxy_transform, "product: proxy roughness transform (default: the library's)")
       ->type_name("T");
+  sub.add_option("--proxy-lobe", proxy_lobe,
+                 "product: the proxy's reflection lobe, mirror (the paper's, around the mirror direction, with "
+                 "--proxy-transform) or half-vector (GGX of the half-vector at the BSDF's roughness; docs/proxy.md) "
+                 "(default: the library's, mirror)")
+      ->type_name("mirror|half-vector");
   sub.add_option("--proxy-min-alpha", proxy_min_alpha,
                  "product: floor on the transformed proxy roughness, [0, 1] (default: 0.2 with --cell-estimate "
                  "moments, else the library's, 0.35)")
@@ -284,6 +289,13 @@ void SceneOptionArgs::apply(RenderOptions& o) const {
       o.product.proxy.transform = parse_roughness_transform(proxy_transform);
     } catch (const Error& e) {
       throw Error(std::string("--proxy-transform: ") + e.what());
+    }
+  }
+  if (!proxy_lobe.empty()) {
+    try {
+      o.product.proxy.reflection_lobe = parse_reflection_lobe(proxy_lobe);
+    } catch (const Error& e) {
+      throw Error(std::string("--proxy-lobe: ") + e.what());
     }
   }
   if (!proxy_min_alpha.empty())

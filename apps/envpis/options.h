@@ -57,7 +57,7 @@ struct SceneOptionArgs {
   std::string peak_ratio;  // empty: the library's default
   std::string fine_texels = "auto";  // the renderer's default: the map's own texels for lat-long maps
   std::string oracle_res = "48", oracle_dirs = "4", oracle_compensation = "on";
-  std::string proxy_transform, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
+  std::string proxy_transform, proxy_lobe, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
       cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
   std::string product_cache = "16", product_cache_resolution = "64", product_depth = "0";

@@ -76,6 +76,8 @@ void put_strategy_options(json& key, const Scene& scene, const RenderOptions& ba
   if (strategy == Strategy::Product)
     key["product"] = {static_cast<int>(base.product.proxy.transform), base.product.proxy.min_alpha,
                       base.product.proxy.max_alpha, base.product.env_mix, base.product.env_floor};
+  if (strategy == Strategy::Product && base.product.proxy.reflection_lobe != ReflectionLobe::Mirror)  // old keys
+    key["proxy_lobe"] = to_string(base.product.proxy.reflection_lobe);
   if (strategy == Strategy::Product && base.product.refine) key["refine_cells"] = base.product.refine_cells;
   if (strategy == Strategy::Product && base.product.cell_estimate != CellEstimate::Cone)  // old keys: cone
     key["cell_estimate"] = to_string(base.product.cell_estimate);

@@ -61,10 +61,21 @@ enum class RoughnessTransform { Slides, Abstract, Hybrid, Fitted };
 RoughnessTransform parse_roughness_transform(const std::string& s);  ///< "slides" | "abstract" | "hybrid" | "fitted"
 const char* to_string(RoughnessTransform t);
 
+/// The reflection lobe's shape. Mirror: the paper's, a GGX-like lobe in c = R.wi around the mirror
+/// direction R, at the transformed roughness a' (`transform`). HalfVector: the GGX distribution of the
+/// half-vector h = normalize(wo + wi), D(N.h) / (4 N.wo), the true lobe's shape but for Fresnel and
+/// shadowing, so no transform: its roughness is the BSDF's, widened in quadrature by half the floor,
+/// sqrt(a^2 + (min_alpha / 2)^2) (a lobe in h is half as wide in wi as the mirror lobe of the same
+/// roughness), and capped at max_alpha. docs/proxy.md, "The half-vector lobe".
+enum class ReflectionLobe { Mirror, HalfVector };
+ReflectionLobe parse_reflection_lobe(const std::string& s);  ///< "mirror" | "half-vector"
+const char* to_string(ReflectionLobe l);
+
 struct ProxyOptions {
   RoughnessTransform transform = RoughnessTransform::Hybrid;
   float min_alpha = 0.35f;  ///< floor on the transformed roughness a' (0 disables)
   float max_alpha = 0.8f;   ///< cap on the transformed roughness a', in [min_alpha, 1] (1 disables)
+  ReflectionLobe reflection_lobe = ReflectionLobe::Mirror;
 };
 
 /// The seven floats. Accumulate lobes with the add_* calls (weights are the lobes' albedos or any
@@ -100,6 +111,7 @@ struct PreparedProxy {
   float alpha_r = 1, alpha_t = 1; ///< transformed roughness
   float eta = 1;                  ///< IOR seen from wo's side
   bool tir = false;               ///< total internal reflection happened
+  bool half_vector = false;       ///< the reflection lobe is ReflectionLobe::HalfVector (alpha_r its roughness)
   bool ok = false;
 
   bool valid() const { return ok; }

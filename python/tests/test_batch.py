@@ -75,6 +75,8 @@ def test_options_reach_the_batch(table):
     options = envpis.ProductSamplerOptions()
     options.env_mix = 0.5
     options.proxy.transform = "slides"
+    options.proxy.reflection_lobe = "half-vector"
+    assert options.proxy.reflection_lobe == "half-vector"
     s = envpis.ProductSampler(table, options)
     got = envpis.product_sample(table, normals[:50], wo[:50], proxies[:50], u[:50], options=options)
     for i in range(50):

@@ -51,6 +51,8 @@ def test_bad_table_options(latlong_map):
         envpis.product_sample(table, [0, 0, 1], [0, 0, 1], [1, 0, 0, 0, 0, 0, 1], np.zeros((3, 2)), options=options)
     with pytest.raises(envpis.Error):
         envpis.ProxyOptions().transform = "sideways"
+    with pytest.raises(envpis.Error, match="reflection lobe"):
+        envpis.ProxyOptions().reflection_lobe = "half"
 
 
 def test_bad_shapes_and_dtypes(table):
