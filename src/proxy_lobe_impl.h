@@ -125,9 +125,8 @@ ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V 
     // mean (1 - s) N.m and spread about sqrt(s) sin(N, m): a linear ramp in between), at least 2%:
     // unlike the mirror lobe it is large just below the horizon, where the light sample is wasted.
     const V cm = l.nx * mx + l.ny * my + l.nz * mz;
-    // Exact square root and division: the ramp is a difference, which would magnify estimates' errors.
-    const V sd = vsqrt(spread * vmax(V(1.0f) - cm * cm, V(0.0f))) + V(1e-4f);
-    const V up = vmin(vmax(V(0.5f) + V(0.5f) * (V(1.0f) - spread) * cm / sd, V(0.0f)), V(1.0f));
+    const V sd = vsqrt_fast(spread * vmax(V(1.0f) - cm * cm, V(0.0f))) + V(1e-4f);
+    const V up = vmin(vmax(V(0.5f) + V(0.5f) * (V(1.0f) - spread) * cm * vrcp_fast(sd), V(0.0f)), V(1.0f));
     value = ggx_half(cm, l.rx * mx + l.ry * my + l.rz * mz, l.co, l.cr, l.mr) * vmax(up, V(0.02f));
   } else {
     value = ggx_like(l.rx * mx + l.ry * my + l.rz * mz, l.cr, l.mr);
