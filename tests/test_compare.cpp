@@ -237,6 +237,7 @@ TEST_F(CompareCommand, SmallRunWritesConsistentMetricsImagesAndReport) {
   EXPECT_EQ(m["regularized"], false);
   EXPECT_EQ(m["regularization"]["caustics"], "reflective,refractive");
   EXPECT_EQ(m["product_options"]["compensation"], "deeper") << "auto, direct light";
+  EXPECT_EQ(m["product_options"]["proxy_lobe"], "half-vector") << "the command's default, not the library's";
   EXPECT_GT(m["overhead"]["ratio"].get<double>(), 0);
   ASSERT_EQ(m["regions"].size(), 8u) << "fig1: one region per sphere";
   EXPECT_EQ(m["regions"][0]["name"], "conductor-0.02");
