@@ -119,26 +119,28 @@ ENVPIS_INLINE V proxy_cone_value(const LobeV<V>& l, V ax, V ay, V az, V cb, V sb
 template <class V, bool kTransmission = true, bool kDiffuse = true>
 ENVPIS_INLINE V proxy_moment_value(const LobeV<V>& l, V ax, V ay, V az, V sb, V mx, V my, V mz, V spread) {
   const V cn = l.nx * ax + l.ny * ay + l.nz * az;
+  // N.w over the cell: mean (1 - s) N.m exactly (N.w is linear in w); variance about s sin^2(N, m) (s is
+  // the per-axis angular variance, taken along the direction in which N.w changes).
+  const V cm = l.nx * mx + l.ny * my + l.nz * mz;
+  const V mean_n = (V(1.0f) - spread) * cm;
+  const V var_n = spread * vmax(V(1.0f) - cm * cm, V(0.0f));
+  const V cr = l.rx * mx + l.ry * my + l.rz * mz;
   V value;
   if (l.half) {
-    // The half-vector lobe at m, times the share of the cell above the horizon (N.w over the cell has
-    // mean (1 - s) N.m and spread about sqrt(s) sin(N, m): a linear ramp in between), at least 2%:
-    // unlike the mirror lobe it is large just below the horizon, where the light sample is wasted.
-    const V cm = l.nx * mx + l.ny * my + l.nz * mz;
-    const V sd = vsqrt_fast(spread * vmax(V(1.0f) - cm * cm, V(0.0f))) + V(1e-4f);
-    const V up = vmin(vmax(V(0.5f) + V(0.5f) * (V(1.0f) - spread) * cm * vrcp_fast(sd), V(0.0f)), V(1.0f));
-    value = ggx_half(cm, l.rx * mx + l.ry * my + l.rz * mz, l.co, l.cr, l.mr) * vmax(up, V(0.02f));
+    // The half-vector lobe at m, times the share of the cell above the horizon (a linear ramp in N.w
+    // between one standard deviation either side of 0), at least 2%: unlike the mirror lobe it is large
+    // just below the horizon, where the light sample is wasted.
+    const V up = vmin(vmax(V(0.5f) + V(0.5f) * mean_n * vrcp_fast(vsqrt_fast(var_n) + V(1e-4f)), V(0.0f)), V(1.0f));
+    value = ggx_half(cm, cr, l.co, l.cr, l.mr) * vmax(up, V(0.02f));
   } else {
-    value = ggx_like(l.rx * mx + l.ry * my + l.rz * mz, l.cr, l.mr);
+    value = ggx_like(cr, l.cr, l.mr);
   }
   V mean_cos(0.0f), var_cos(0.0f);
   if constexpr (kDiffuse) {
-    // N.w over the cell: mean (1 - s) N.m exactly (N.w is linear in w); variance about s sin^2(N, m)
-    // (s is the per-axis angular variance, taken along the direction in which N.w changes), plus a
-    // little so that it is never 0.
-    const V cm = l.nx * mx + l.ny * my + l.nz * mz;
-    mean_cos = (V(1.0f) - spread) * cm;
-    var_cos = V(2.0f * kInvPi) * spread * vmax(V(1.0f) - cm * cm, V(0.0f)) + V(1e-6f);
+    // The cosine lobes: E[max(0, N.w)] from that mean and variance, plus a little variance so that it
+    // is never 0.
+    mean_cos = mean_n;
+    var_cos = V(2.0f * kInvPi) * var_n + V(1e-6f);
     value = value + l.kd * mean_positive_part(mean_cos, var_cos);
   }
   value = select(cn > -sb, value, V(0.0f));
