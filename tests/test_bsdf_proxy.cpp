@@ -248,33 +248,45 @@ TEST(BsdfProxy, ProxyLobesCoverTheTrueGgxLobes) {
 }
 
 namespace {
-/// int f^2 / p over the upper hemisphere (over (int f)^2, minus 1) for the proxy lobe of roughness ap
-/// around the mirror direction R, with 5% of a uniform hemisphere mixed in: the criterion
-/// scripts/fit-proxy-roughness.py minimizes. Quadrature on a grid around R, dense near it.
-double fit_divergence(Vec3 wo, double a, double ap) {
+/// The chi-square divergence int f^2 / p - 1 of GGX reflection x cos (height-correlated Smith
+/// G2 = 1 / (1 + Lambda_o + Lambda_i), as the renderer's and the fit's; no Fresnel) from a lobe
+/// normalized over the upper hemisphere, with a share `mix` of a uniform hemisphere mixed in: the
+/// variance of a light sample drawn from it under a uniform sky. lobe(wi, c) with c = R.wi, computed
+/// exactly. Quadrature on a grid around the mirror direction R, dense near it.
+double lobe_divergence(Vec3 wo, double a, const std::function<double(Vec3, double)>& lobe, double mix) {
   const Vec3 r{-wo.x, -wo.y, wo.z}, b1 = normalize(cross(r, Vec3{0, 1, 0})), b2 = cross(r, b1);
   constexpr int kU = 300, kPhi = 96;
-  std::vector<double> f, lobe, dw;
+  std::vector<double> f, p, dw;
   for (int i = 0; i < kU; ++i) {
     const double u = (i + 0.5) / kU, t = kPi * u * u, dt = 2 * kPi * u / kU;
     for (int j = 0; j < kPhi; ++j) {
       const double phi = (j + 0.5) / kPhi * 2 * kPi;
       const Vec3 wi = r * float(std::cos(t)) + b1 * float(std::sin(t) * std::cos(phi)) + b2 * float(std::sin(t) * std::sin(phi));
       if (wi.z <= 0) continue;
-      const double c = std::cos(t), d = 1 + (ap * ap - 1) * c * c;
-      // f cos with the height-correlated G2 = 1 / (1 + Lambda_o + Lambda_i), as the renderer's and the fit's
       const Vec3 h = normalize(wo + wi);
       const double g2 = 1 / (1 / smith_g1(wo.z, a) + 1 / smith_g1(wi.z, a) - 1);
       f.push_back(ggx_d(h.z, a) * g2 / (4 * wo.z) * wi.z);
-      lobe.push_back(c > 0 ? ap * ap / (kPi * d * d) : 0.0);
+      p.push_back(lobe(wi, std::cos(t)));
       dw.push_back(std::sin(t) * dt * 2 * kPi / kPhi);
     }
   }
   double integral = 0, mass = 0;
-  for (std::size_t k = 0; k < f.size(); ++k) integral += f[k] * dw[k], mass += lobe[k] * dw[k];
+  for (std::size_t k = 0; k < f.size(); ++k) integral += f[k] * dw[k], mass += p[k] * dw[k];
   double sum = 0;
-  for (std::size_t k = 0; k < f.size(); ++k) sum += f[k] * f[k] / (0.95 * lobe[k] / mass + 0.05 / (2 * kPi)) * dw[k];
+  for (std::size_t k = 0; k < f.size(); ++k) sum += f[k] * f[k] / ((1 - mix) * p[k] / mass + mix / (2 * kPi)) * dw[k];
   return sum / (integral * integral) - 1;
+}
+
+/// The criterion scripts/fit-proxy-roughness.py minimizes: the mirror lobe of roughness ap around R,
+/// with 5% of a uniform hemisphere mixed in.
+double fit_divergence(Vec3 wo, double a, double ap) {
+  return lobe_divergence(
+      wo, a,
+      [ap](Vec3, double c) {
+        const double d = 1 + (ap * ap - 1) * c * c;
+        return c > 0 ? ap * ap / (kPi * d * d) : 0.0;
+      },
+      0.05);
 }
 }  // namespace
 
@@ -302,32 +314,9 @@ TEST(BsdfProxy, FittedTransformMinimizesItsCriterionAndBeatsTheSlidesAtNormalVie
 }
 
 namespace {
-/// The chi-square divergence int f^2 / p - 1 of GGX reflection x cos (height-correlated Smith, no Fresnel)
-/// from a proxy's own value (PreparedProxy::eval, the kernels' point value) normalized over the upper
-/// hemisphere: the variance of a light sample drawn from the proxy under a uniform sky. Quadrature on a
-/// grid around R, dense near it.
+/// lobe_divergence of a proxy's own value (PreparedProxy::eval, the kernels' point value), nothing mixed in.
 double proxy_divergence(Vec3 wo, double a, const PreparedProxy& proxy) {
-  const Vec3 r{-wo.x, -wo.y, wo.z}, b1 = normalize(cross(r, Vec3{0, 1, 0})), b2 = cross(r, b1);
-  constexpr int kU = 300, kPhi = 96;
-  double integral = 0, mass = 0, sum = 0;
-  std::vector<double> f, p, dw;
-  for (int i = 0; i < kU; ++i) {
-    const double u = (i + 0.5) / kU, t = kPi * u * u, dt = 2 * kPi * u / kU;
-    for (int j = 0; j < kPhi; ++j) {
-      const double phi = (j + 0.5) / kPhi * 2 * kPi;
-      const Vec3 wi = r * float(std::cos(t)) + b1 * float(std::sin(t) * std::cos(phi)) + b2 * float(std::sin(t) * std::sin(phi));
-      if (wi.z <= 0) continue;
-      const Vec3 h = normalize(wo + wi);
-      const double g2 = 1 / (1 / smith_g1(wo.z, a) + 1 / smith_g1(wi.z, a) - 1);
-      f.push_back(ggx_d(h.z, a) * g2 / (4 * wo.z) * wi.z);
-      p.push_back(proxy.eval(wi));
-      dw.push_back(std::sin(t) * dt * 2 * kPi / kPhi);
-      integral += f.back() * dw.back();
-      mass += p.back() * dw.back();
-    }
-  }
-  for (std::size_t k = 0; k < f.size(); ++k) sum += f[k] * f[k] / (p[k] / mass) * dw[k];
-  return sum / (integral * integral) - 1;
+  return lobe_divergence(wo, a, [&proxy](Vec3 wi, double) { return double(proxy.eval(wi)); }, 0.0);
 }
 }  // namespace
 
