@@ -20,12 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir() {
-  const fs::path d = fs::temp_directory_path() / ("envpis_test_map_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
-
 void write_image(const std::string& path, int w, int h, int channels, const std::vector<float>& px) {
   auto out = OIIO::ImageOutput::create(path);
   ASSERT_TRUE(out) << OIIO::geterror();
@@ -59,7 +53,8 @@ TEST(EnvironmentMap, LoadsEveryBlenderMap) {
 }
 
 TEST(EnvironmentMap, WritesAndReadsExrAndHdr) {
-  const fs::path dir = temp_dir();
+  const TempDir tmp;
+  const fs::path& dir = tmp.path;
   const int w = 8, h = 4;
   std::vector<float> px(w * h * 3);
   for (int i = 0; i < w * h * 3; ++i) px[i] = 0.25f * (i % 7) + 0.5f;
@@ -83,11 +78,11 @@ TEST(EnvironmentMap, WritesAndReadsExrAndHdr) {
   const Rgb g = EnvironmentMap::load(grey).texel(1, 1);
   EXPECT_FLOAT_EQ(g.r, 3.0f);
   EXPECT_FLOAT_EQ(g.g, 3.0f);
-  fs::remove_all(dir);
 }
 
 TEST(EnvironmentMap, BadFilesGiveClearErrors) {
-  const fs::path dir = temp_dir();
+  const TempDir tmp;
+  const fs::path& dir = tmp.path;
   // missing
   std::string e = load_error((dir / "nope.exr").string());
   EXPECT_NE(e.find("nope.exr"), std::string::npos) << e;
@@ -122,14 +117,14 @@ TEST(EnvironmentMap, BadFilesGiveClearErrors) {
     e = load_error(cut);
     EXPECT_NE(e.find("cut"), std::string::npos) << ext << ": " << (e.empty() ? "loaded without error" : e);
   }
-  fs::remove_all(dir);
 }
 
 // The reader follows the content for the usual HDR formats (a wrong extension is harmless and
 // reported), the extension otherwise; non-regular files, unknown formats and unreadable paths fail
 // cleanly, without blocking (a FIFO) and without OpenImageIO's try-every-reader fallback.
 TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
-  const fs::path dir = temp_dir() / "reader";
+  const TempDir tmp;
+  const fs::path dir = tmp.path / "reader";
   fs::create_directories(dir);
   std::vector<float> px(8 * 4 * 3, 1.0f);
   px[5] = 7.0f;
@@ -195,7 +190,6 @@ TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
   const EnvironmentMap b = EnvironmentMap::load(black);
   EXPECT_TRUE(b.is_black());
   EXPECT_EQ(b.max_radiance(), 0.0f);
-  fs::remove_all(dir);
 }
 
 // What a header claims is checked before any pixel is read: a 600-byte EXR whose data window claims
@@ -204,7 +198,8 @@ TEST(EnvironmentMap, ReaderChoiceAndNonRegularFiles) {
 // that overhang the image, a data window away from (0, 0) and 8/16-bit integer files all convert to the
 // right floats.
 TEST(EnvironmentMap, HeaderClaimsAreBoundedAndStoredFormatsConvert) {
-  const fs::path dir = temp_dir() / "claims";
+  const TempDir tmp;
+  const fs::path dir = tmp.path / "claims";
   fs::create_directories(dir);
   const std::string small = (dir / "small.exr").string();
   write_image(small, 8, 4, 3, std::vector<float>(8 * 4 * 3, 0.5f));
@@ -302,7 +297,6 @@ TEST(EnvironmentMap, HeaderClaimsAreBoundedAndStoredFormatsConvert) {
     EXPECT_NEAR(t.g, 0.5f, type == OIIO::TypeDesc::UINT8 ? 1.0f / 255 : 1.0f / 65535) << name;
     EXPECT_FLOAT_EQ(t.b, 1.0f) << name;
   }
-  fs::remove_all(dir);
 }
 
 TEST(EnvironmentMap, RepairsNanInfAndNegativeTexels) {

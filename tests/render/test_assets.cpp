@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cli_util.h"
+#include "test_util.h"
 #include "envpis/image_file.h"
 #include "render/gltf.h"
 #include "render/render.h"
@@ -277,9 +278,8 @@ void write_png(const fs::path& path, int w, int h, const std::vector<std::uint8_
 
 /// A 2 x 2 quad facing glTF's +Y (the renderer's +Z), UVs like make_quad, with a base-colour texture
 /// (red green / blue white, KHR_texture_transform `transform_json`) and a 1 x 1 normal map `normal`.
-fs::path write_test_gltf(const std::string& name, const std::string& transform_json, std::array<std::uint8_t, 3> normal) {
-  const fs::path dir = fs::temp_directory_path() / ("envpis_test_assets_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+fs::path write_test_gltf(const fs::path& dir, const std::string& name, const std::string& transform_json,
+                         std::array<std::uint8_t, 3> normal) {
   write_png(dir / "colors.png", 2, 2, {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255});
   write_png(dir / (name + "-normal.png"), 1, 1, {normal[0], normal[1], normal[2]});
   std::vector<std::uint8_t> bin;
@@ -315,8 +315,9 @@ SurfaceHit hit_at(const Scene& s, float x, float y) {
 }
 
 TEST(Gltf, TextureLookUpFollowsTheUvsAndKhrTextureTransform) {
-  const fs::path plain = write_test_gltf("plain", "", {128, 128, 255});
-  const fs::path shifted = write_test_gltf("shifted", R"(, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0]}})", {128, 128, 255});
+  const test::TempDir tmp;
+  const fs::path plain = write_test_gltf(tmp.path, "plain", "", {128, 128, 255});
+  const fs::path shifted = write_test_gltf(tmp.path, "shifted", R"(, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0]}})", {128, 128, 255});
   const Scene a = load_scene_file(plain.string(), small_sky()), b = load_scene_file(shifted.string(), small_sky());
   ASSERT_EQ(a.objects().size(), 1u);
   const SceneMaterial& ma = a.material(a.objects()[0].material);
@@ -344,7 +345,8 @@ TEST(Gltf, TextureLookUpFollowsTheUvsAndKhrTextureTransform) {
 
 TEST(Gltf, NormalMapFrameHasTheTangentAlongUAndGreenTowardsVZero) {
   // Tangent-space normal (0.36, 0.48, 0.8) -> RGB (0.68, 0.74, 0.9).
-  const fs::path file = write_test_gltf("bent", "", {173, 189, 230});
+  const test::TempDir tmp;
+  const fs::path file = write_test_gltf(tmp.path, "bent", "", {173, 189, 230});
   const Scene s = load_scene_file(file.string(), small_sky());
   const SceneMaterial& m = s.material(s.objects()[0].material);
   ASSERT_TRUE(m.pbr->has_normal_map());
@@ -363,8 +365,8 @@ TEST(Gltf, CamerasComeFromTheFile) {
   EXPECT_LT(model.camera->vfov_degrees, 179.0f);
   EXPECT_GT(length(model.camera->to - model.camera->from), 0.0f);
   // And in a JSON scene with "use_camera", moved by the object's transform.
-  const fs::path dir = fs::temp_directory_path() / ("envpis_test_assets_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path;
   std::ofstream(dir / "cam.json") << R"({"objects": [{"type": "gltf", "file": ")" << kModels
                                   << R"(/cameras/Cameras.gltf", "use_camera": true, "translate": [0, 0, 10]}]})";
   const Scene s = load_scene_file((dir / "cam.json").string(), small_sky());
@@ -384,8 +386,8 @@ TEST(Gltf, BrokenFilesFailWithOneCleanLineThroughTheCommand) {
     ASSERT_TRUE(fs::exists(kModels + "/" + f)) << "missing " << kModels << "/" << f << " (Debian assimp-testmodels)";
     files.push_back(kModels + "/" + f);
   }
-  const fs::path dir = fs::temp_directory_path() / ("envpis_test_assets_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path;
   // fuzz_gltf's finds and guards: a PNG texture with a bad IDAT checksum (libpng's message has two
   // lines), a glTF 1.0 file (never handed to assimp's other readers), an image URI naming /dev/zero.
   {
@@ -405,7 +407,7 @@ TEST(Gltf, BrokenFilesFailWithOneCleanLineThroughTheCommand) {
     const std::string v1 = kModels + "/../glTF/TwoBoxes/TwoBoxes.gltf";
     ASSERT_TRUE(fs::exists(v1)) << "missing " << v1 << " (Debian assimp-testmodels)";
     files.push_back(v1);
-    const fs::path zero = write_test_gltf("devzero", "", {128, 128, 255});
+    const fs::path zero = write_test_gltf(tmp.path, "devzero", "", {128, 128, 255});
     std::ifstream zin(zero);
     std::string text((std::istreambuf_iterator<char>(zin)), {});
     zin.close();
@@ -422,7 +424,7 @@ TEST(Gltf, BrokenFilesFailWithOneCleanLineThroughTheCommand) {
     b[4] = 7;
     std::ofstream(dir / "version.glb", std::ios::binary).write(b.data(), std::streamsize(b.size()));
     std::ofstream(dir / "garbage.gltf") << "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [";
-    const fs::path good = write_test_gltf("badimage", "", {128, 128, 255});
+    const fs::path good = write_test_gltf(tmp.path, "badimage", "", {128, 128, 255});
     std::ofstream(dir / "colors.png") << "not a png";
     files.push_back(good.string());
   }
@@ -443,8 +445,8 @@ TEST(Gltf, BrokenFilesFailWithOneCleanLineThroughTheCommand) {
 }
 
 TEST(Gltf, SceneFilesNameTheFieldAndMissingAssetsFail) {
-  const fs::path dir = fs::temp_directory_path() / ("envpis_test_assets_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path;
   std::ofstream(dir / "broken.json") << R"({"camera": {"from": [0, -5, 1], "to": [0, 0, 0]}, "objects": [
     {"type": "gltf", "file": "${ASSIMP_MODELS}/glTF2/wrongTypes/badNumber.gltf"}]})";
   try {
