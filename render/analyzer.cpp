@@ -404,7 +404,9 @@ void summarize(ObjectAnalysis& r, const AnalyzerOptions& o) {
     for (const PointAnalysis& p : r.points) sum += p.v[i];
     r.v_mean.push_back(r.points.empty() ? kNaN : sum / double(r.points.size()));
   }
-  r.v_product = object_mean(r, [](const PointAnalysis& p) { return p.v_product; });
+  // The geometric mean leaves zeros out; a limit of 0 at every point is 0, not undefined.
+  const bool all_zero = std::all_of(r.points.begin(), r.points.end(), [](const PointAnalysis& p) { return p.v_product == 0; });
+  r.v_product = all_zero && !r.points.empty() ? 0.0 : object_mean(r, [](const PointAnalysis& p) { return p.v_product; });
   for (std::size_t l = 0; l < o.exact_levels.size(); ++l)
     r.v_exact.push_back(object_mean(r, [&](const PointAnalysis& p) { return p.v_exact[l]; }));
 }

@@ -269,7 +269,9 @@ bool finish(const Sums& s, const AnalyzerOptions& options_, const std::vector<in
       return (s.light_sq[k][c] - mean * mean + (I - mean) * (I - mean)) / (I * I);
     }));
   }
-  r->v_product = mean_over_channels([&](int c, double I) { return s.integral_blind * s.product_sq[c] / (I * I) - 1; });
+  // A variance: below 0 only by round-off (it is 0 for a grey integrand).
+  r->v_product = std::max(
+      0.0, mean_over_channels([&](int c, double I) { return s.integral_blind * s.product_sq[c] / (I * I) - 1; }));
   std::vector<std::array<double, 4>> aggregated;
   for (std::size_t l = 0; l < options_.exact_levels.size(); ++l) {
     const std::size_t source = s.exact_source[l];

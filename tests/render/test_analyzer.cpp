@@ -150,11 +150,20 @@ TEST(Analyzer, KnownZeroVariances) {
     EXPECT_NEAR(a->integral[0], 0.5, 2e-3);  // white furnace: albedo times radiance
     EXPECT_LT(a->v[0], 1e-4);                // bsdf
     EXPECT_NEAR(a->v_light[1], 5.0 / 3.0, 0.02) << "uniform sampling of a cosine over the sphere: 8/3 - 1";
-    EXPECT_LT(std::fabs(a->v_product), 1e-9);
+    EXPECT_LT(a->v_product, 1e-9);
+    EXPECT_GE(a->v_product, 0.0) << "a variance: round-off below 0 made the object's geometric mean NaN";
     for (double v : a->v_exact) {
       EXPECT_GT(v, a->v_product - 1e-9);
       EXPECT_LE(v, a->v_light[1] * 1.001);
     }
+  }
+  // Per object, a limit of 0 at every point is 0 (the geometric mean leaves zeros out: it was NaN).
+  const SceneAnalysis all = analyze_scene(analyzer, scene, 4, 0);
+  ASSERT_FALSE(all.objects.empty());
+  for (const ObjectAnalysis& r : all.objects) {
+    EXPECT_TRUE(std::isfinite(r.v_product));
+    EXPECT_GE(r.v_product, 0.0);
+    EXPECT_LT(r.v_product, 1e-9);
   }
 }
 
