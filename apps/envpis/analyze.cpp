@@ -90,6 +90,16 @@ void print_table(const Scene& scene, const SceneAnalysis& a, const AnalyzerOptio
     for (double v : r.v) std::printf(" %10.4g", v);
     std::printf("\n");
   }
+  // The geometric mean is the typical point's V; a relMSE over pixels averages like the arithmetic mean,
+  // which the few points with a bright source in the lobe decide (docs/decisions.md, "Narrow lobes").
+  std::printf("\nThe same, arithmetic mean over the points (as a relMSE averages its pixels):\n%-16s %4s", "object", "pts");
+  for (Strategy s : o.strategies) std::printf(" %10s", to_string(s));
+  std::printf("\n");
+  for (const ObjectAnalysis& r : a.objects) {
+    std::printf("%-16.16s %4zu", scene.objects()[r.object].name.c_str(), r.points.size());
+    for (double v : r.v_mean) std::printf(" %10.4g", v);
+    std::printf("\n");
+  }
   std::printf("\nLight sample alone (weight 1) and the limits:\n%-16s", "object");
   for (Strategy s : o.strategies)
     if (s != Strategy::Bsdf) std::printf(" %10s", to_string(s));
