@@ -3,7 +3,6 @@
 
 #include <OpenImageIO/imageio.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>

@@ -78,28 +78,29 @@ AnalyzerOptions parse_options(const AnalyzeArgs& a, int* threads) {
   return o;
 }
 
-void print_table(const Scene& scene, const SceneAnalysis& a, const AnalyzerOptions& o) {
-  std::printf("\nV = Var / I^2 of one sample, geometric mean over the points. Renderer's estimator (light + BSDF "
-              "sample, %s heuristic):\n",
-              to_string(o.heuristic));
+// The header and one row per object of the renderer's estimator's V per strategy, `v` one of
+// ObjectAnalysis's per-strategy summaries.
+void print_estimator_rows(const Scene& scene, const SceneAnalysis& a, const AnalyzerOptions& o,
+                          std::vector<double> ObjectAnalysis::*v) {
   std::printf("%-16s %4s", "object", "pts");
   for (Strategy s : o.strategies) std::printf(" %10s", to_string(s));
   std::printf("\n");
   for (const ObjectAnalysis& r : a.objects) {
     std::printf("%-16.16s %4zu", scene.objects()[r.object].name.c_str(), r.points.size());
-    for (double v : r.v) std::printf(" %10.4g", v);
+    for (double x : r.*v) std::printf(" %10.4g", x);
     std::printf("\n");
   }
+}
+
+void print_table(const Scene& scene, const SceneAnalysis& a, const AnalyzerOptions& o) {
+  std::printf("\nV = Var / I^2 of one sample, geometric mean over the points. Renderer's estimator (light + BSDF "
+              "sample, %s heuristic):\n",
+              to_string(o.heuristic));
+  print_estimator_rows(scene, a, o, &ObjectAnalysis::v);
   // The geometric mean is the typical point's V; a relMSE over pixels averages like the arithmetic mean,
   // which the few points with a bright source in the lobe decide (docs/decisions.md, "Narrow lobes").
-  std::printf("\nThe same, arithmetic mean over the points (as a relMSE averages its pixels):\n%-16s %4s", "object", "pts");
-  for (Strategy s : o.strategies) std::printf(" %10s", to_string(s));
-  std::printf("\n");
-  for (const ObjectAnalysis& r : a.objects) {
-    std::printf("%-16.16s %4zu", scene.objects()[r.object].name.c_str(), r.points.size());
-    for (double v : r.v_mean) std::printf(" %10.4g", v);
-    std::printf("\n");
-  }
+  std::printf("\nThe same, arithmetic mean over the points (as a relMSE averages its pixels):\n");
+  print_estimator_rows(scene, a, o, &ObjectAnalysis::v_mean);
   std::printf("\nLight sample alone (weight 1) and the limits:\n%-16s", "object");
   for (Strategy s : o.strategies)
     if (s != Strategy::Bsdf) std::printf(" %10s", to_string(s));

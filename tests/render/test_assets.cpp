@@ -11,7 +11,6 @@
 //   - every strategy converges to the same per-object means on an asset scene (z-test).
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
