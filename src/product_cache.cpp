@@ -91,7 +91,12 @@ ProductCache::ProductCache(const ImportanceTable& table, const ProductSamplerOpt
   samplers_.reserve(static_cast<std::size_t>(options.entries));
   for (int i = 0; i < options.entries; ++i) samplers_.emplace_back(table, sampler);
   keys_.assign(samplers_.size(), Key{});
-  last_use_.assign(samplers_.size(), 0);
+  used_.assign(samplers_.size(), 0);
+  referenced_.assign(samplers_.size(), 0);
+  int bits = 2;
+  while ((std::size_t(1) << bits) < 2 * samplers_.size()) ++bits;  // at most half full: short probe chains
+  index_.assign(std::size_t(1) << bits, 0);
+  index_shift_ = 64 - bits;
 }
 
 ProductCache::ProductCache(const ImportanceTable& table, const Portals& portals, const ProductSamplerOptions& sampler,
@@ -200,32 +205,67 @@ const ProductSampler& ProductCache::exactly(Vec3 p, Vec3 n, Vec3 wo, const BsdfP
   return *exact_;
 }
 
+// Multiplicative hashing: each field by its own odd constant, folded, and the product's top bits (the
+// best mixed) as the position.
+std::size_t ProductCache::home(const Key& k) const {
+  std::uint64_t h = k.n * 0x9e3779b97f4a7c15ull ^ k.wo * 0xc2b2ae3d27d4eb4full ^ k.proxy * 0x165667b19e3779f9ull ^
+                    k.p * 0xd6e8feb86659fd93ull;
+  h ^= h >> 29;
+  return static_cast<std::size_t>((h * 0xff51afd7ed558ccdull) >> index_shift_);
+}
+
+std::size_t ProductCache::find_index(const Key& k) const {
+  const std::size_t mask = index_.size() - 1;
+  std::size_t pos = home(k);
+  while (index_[pos] != 0 && !(keys_[static_cast<std::size_t>(index_[pos] - 1)] == k)) pos = (pos + 1) & mask;
+  return pos;
+}
+
+void ProductCache::erase_index(std::size_t pos) {
+  // Backward-shift deletion: later entries of the chain move into the hole when their home position
+  // does not lie cyclically in (hole, their position], so every probe still reaches them.
+  const std::size_t mask = index_.size() - 1;
+  std::size_t hole = pos;
+  for (std::size_t i = (pos + 1) & mask; index_[i] != 0; i = (i + 1) & mask) {
+    const std::size_t h = home(keys_[static_cast<std::size_t>(index_[i] - 1)]);
+    const bool stays = hole <= i ? (hole < h && h <= i) : (hole < h || h <= i);
+    if (stays) continue;
+    index_[hole] = index_[i];
+    hole = i;
+  }
+  index_[hole] = 0;
+}
+
 std::size_t ProductCache::slot_for(const Key& k, bool& prepared) {
-  ++clock_;
-  auto holds = [&](std::size_t i) { return last_use_[i] != 0 && keys_[i] == k; };
-  auto use = [&](std::size_t i) {
-    last_use_[i] = clock_;
-    last_ = i;
-    return i;
-  };
   prepared = true;
-  if (holds(last_)) {  // consecutive samples of a pixel: the usual hit
+  if (used_[last_] && keys_[last_] == k) {  // consecutive samples of a pixel: the usual hit
     ++hits_;
-    return use(last_);
+    referenced_[last_] = 1;
+    return last_;
   }
-  // One pass: the slot holding k (the other samples of a pixel hit here), else the oldest, to prepare.
-  std::size_t oldest = 0;
-  for (std::size_t i = 0; i < keys_.size(); ++i) {
-    if (keys_[i].n == k.n && holds(i)) {
-      ++hits_;
-      return use(i);
-    }
-    if (last_use_[i] < last_use_[oldest]) oldest = i;
+  const std::size_t pos = find_index(k);
+  if (index_[pos] != 0) {
+    ++hits_;
+    last_ = static_cast<std::size_t>(index_[pos] - 1);
+    referenced_[last_] = 1;
+    return last_;
   }
+  // A miss: the hand passes referenced slots (clearing their mark) up to one that is not.
+  while (referenced_[hand_]) {
+    referenced_[hand_] = 0;
+    hand_ = (hand_ + 1) % keys_.size();
+  }
+  const std::size_t victim = hand_;
+  hand_ = (hand_ + 1) % keys_.size();
+  if (used_[victim]) erase_index(find_index(keys_[victim]));
   ++misses_;
-  keys_[oldest] = k;
+  keys_[victim] = k;
+  used_[victim] = 1;
+  referenced_[victim] = 1;
+  index_[find_index(k)] = static_cast<std::int32_t>(victim + 1);
   prepared = false;
-  return use(oldest);
+  last_ = victim;
+  return victim;
 }
 
 }  // namespace envpis

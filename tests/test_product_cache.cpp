@@ -77,6 +77,45 @@ TEST(ProductCache, ReusedSamplerIsTheSamplerOfTheRoundedPoint) {
   EXPECT_LT(2 * small.hits(), large.hits()) << small.hits();
 }
 
+// The slots are found through a hash index with evictions (backward-shift deletion, CLOCK): with many
+// more keys than slots, in an order that revisits some, every prepare() must still return the sampler
+// of its own key, a key just used must hit, and hits plus misses count every call.
+TEST(ProductCache, HashIndexKeepsEveryKeyFindableThroughEvictions) {
+  const ImportanceTable table(synthetic_sky(64, 32), refined_table());
+  const ProductSamplerOptions so = refined_sampler();
+  for (int entries : {1, 2, 3, 8, 64}) {
+    ProductCache cache(table, so, {32, entries});
+    ProductSampler fresh(table, so);
+    std::mt19937_64 rng(100 + entries);
+    std::vector<Point> pool;  // 3 x entries + 5 distinct keys (at K = 32, random directions differ)
+    for (const Point& p : clustered_points(3 * entries + 5, 17)) {
+      Point q = p;
+      q.n = random_direction(rng);
+      q.wo = random_direction(rng);
+      if (dot(q.wo, q.n) < 0) q.wo = -q.wo;
+      pool.push_back(q);
+    }
+    std::uint64_t calls = 0;
+    for (int i = 0; i < 4000; ++i) {
+      // Mostly a small working set (hits), sometimes any key of the pool (evictions).
+      const std::size_t j = rng() % 4 ? rng() % std::max<std::size_t>(1, entries / 2 + 1) : rng() % pool.size();
+      const Point& p = pool[j];
+      const ProductSampler& s = cache.prepare(p.n, p.wo, p.proxy);
+      ++calls;
+      const ProductCache::Rounded r = cache.round(p.n, p.wo, p.proxy);
+      ASSERT_TRUE(fresh.prepare(r.n, r.wo, r.proxy));
+      const Vec3 d = random_direction(rng);
+      ASSERT_EQ(fresh.pdf(d), s.pdf(d)) << "entries " << entries << " call " << i;
+      const std::uint64_t hits = cache.hits();
+      cache.prepare(p.n, p.wo, p.proxy);  // the same key again: a hit
+      ++calls;
+      ASSERT_EQ(cache.hits(), hits + 1) << "entries " << entries << " call " << i;
+    }
+    EXPECT_EQ(cache.hits() + cache.misses(), calls);
+    EXPECT_GT(cache.misses(), 100u) << entries;  // the evictions were exercised
+  }
+}
+
 TEST(ProductCache, RoundingIsAsSmallAsDocumented) {
   const ImportanceTable table(synthetic_sky(64, 32));
   ProductCache cache(table, {}, {128, 16});

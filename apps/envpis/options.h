@@ -60,7 +60,7 @@ struct SceneOptionArgs {
   std::string proxy_transform, proxy_lobe, proxy_min_alpha, proxy_max_alpha, env_mix, env_floor, refine_cells,
       cell_estimate;  // empty: the library's defaults
   std::string closed_surfaces;  // empty: the scene's setting (on for built-in scenes)
-  std::string product_cache = "16", product_cache_resolution = "64", product_depth = "0";
+  std::string product_cache = "64", product_cache_resolution = "64", product_depth = "0";
   std::string product_cache_step = "0.03125";
   std::string product_max_roughness = "0.5";  // docs/assets.md, "by the vertex's material"
   std::string product_compensation = "auto";  // docs/assets.md, "`auto`: the compensated product along paths"

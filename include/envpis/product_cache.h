@@ -13,8 +13,10 @@
 //   - a proxy with neither reflection nor refraction (diffuse, translucent) is the same for every wo
 //     on one side of the surface, so its key holds n or -n, whichever is on wo's side, in place of wo:
 //     the hits of a flat diffuse surface share one key whatever the view.
-// A shading point whose key is already prepared reuses that sampler; otherwise the least recently
-// used slot is prepared for the new key.
+// A shading point whose key is already prepared reuses that sampler; otherwise a slot not used
+// since the eviction hand last passed it (CLOCK, an approximation of least recently used) is prepared
+// for the new key. Keys are found through a hash index, so a large cache costs no more per point
+// than a small one.
 //
 // The distribution used at a shading point is therefore a function of the point alone (through its
 // key), never of the points before it or of the cache's size: a reused sampler is identical to one
@@ -52,7 +54,7 @@ namespace envpis {
 
 struct ProductCacheOptions {
   int resolution = 64;   ///< K: normal and wo components rounded to multiples of 1/K, 1..4095
-  int entries = 16;      ///< samplers kept (each O(T^2) memory), 1..1024
+  int entries = 64;      ///< samplers kept (each O(T^2) memory), 1..1024
   /// With portals: the shading point's coordinates are rounded to multiples of this (world units),
   /// finite and > 0. Points beyond 2^20 steps from the origin are prepared exactly.
   float position_step = 0.05f;
@@ -108,12 +110,19 @@ class ProductCache {
   std::vector<ProductSampler> samplers_;
   std::vector<PortalView> views_;  // with portals: one per slot, then the exact point's last
   std::vector<Key> keys_;
-  std::vector<std::uint64_t> last_use_;  // 0: the slot holds no key yet
+  std::vector<char> used_;        // the slot holds a key
+  std::vector<char> referenced_;  // used since the eviction hand last passed it
+  std::vector<std::int32_t> index_;  // open addressing, linear probing: slot + 1, or 0 for empty
+  int index_shift_ = 62;             // 64 - log2(index_.size())
+  std::size_t hand_ = 0;             // the eviction hand (CLOCK)
+  std::size_t home(const Key& k) const;        // k's first position in index_
+  std::size_t find_index(const Key& k) const;  // k's position in index_, or the empty one that ends its probe
+  void erase_index(std::size_t pos);           // removes index_[pos], shifting its probe chain back
   std::vector<char> valid_;              // with portals: the slot's sampler is valid
   std::unique_ptr<ProductSampler> exact_;  // with portals: prepared at the shading point itself
   ProductSampler invalid_;               // never prepared with a valid point: for zero or NaN n, wo
   std::size_t last_ = 0;                 // the slot prepare() returned last
-  std::uint64_t clock_ = 0, hits_ = 0, misses_ = 0, exact_points_ = 0;
+  std::uint64_t hits_ = 0, misses_ = 0, exact_points_ = 0;
 };
 
 }  // namespace envpis
