@@ -30,6 +30,14 @@
 
 namespace envpis {
 
+namespace detail {
+/// Starts loading the cache lines of p[0, n) into the cache (every 64 bytes, and the last).
+inline void prefetch_floats(const float* p, int n) {
+  for (int i = 0; i < n; i += 16) __builtin_prefetch(p + i);
+  if (n > 0) __builtin_prefetch(p + n - 1);
+}
+}  // namespace detail
+
 class DiscreteDistribution2D {
  public:
   struct Sample {
@@ -76,11 +84,7 @@ class DiscreteDistribution2D {
     __builtin_prefetch(row_cdf_.data());
     __builtin_prefetch(row_sum_.data());
   }
-  void prefetch_row(int y) const {
-    const float* row = mass_.data() + static_cast<std::size_t>(y) * w_;
-    for (int x = 0; x < w_; x += 16) __builtin_prefetch(row + x);
-    __builtin_prefetch(row + w_ - 1);
-  }
+  void prefetch_row(int y) const { detail::prefetch_floats(mass_.data() + static_cast<std::size_t>(y) * w_, w_); }
   /// The u that sample() maps to cell (x, y) and `offset`; inverse of sample() on cells with mass.
   Point2 invert(int x, int y, Point2 offset) const;
 
@@ -98,12 +102,6 @@ class DiscreteDistribution2D {
 
 namespace detail {
 constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
-/// Starts loading the cache lines of p[0, n) (every 64 bytes and the last), up to 8 lines.
-inline void prefetch_floats(const float* p, int n) {
-  const int m = std::min(n, 128);
-  for (int i = 0; i < m; i += 16) __builtin_prefetch(p + i);
-  if (m > 0) __builtin_prefetch(p + m - 1);
-}
 inline float clamp_unit(float u) { return std::min(std::max(u, 0.0f), kOneMinusEpsilon); }
 }  // namespace detail
 
@@ -186,12 +184,14 @@ inline CumulativeDistribution2DView::Sample CumulativeDistribution2DView::sample
   const float uy = detail::clamp_unit(u.y), ux = detail::clamp_unit(u.x);
   const int n = n_;
   // Each binary search would wait on one cache line after another; loading all of a search's lines
-  // at once lets the misses overlap (the fine level is megabytes, mostly beyond L2).
-  detail::prefetch_floats(cdf_, n);
+  // at once lets the misses overlap (the fine level is megabytes, mostly beyond L2). Up to 8 lines
+  // each: a longer search touches only a few of its lines.
+  const int span = std::min(n, 128);
+  detail::prefetch_floats(cdf_, span);
   Sample s;
   s.y = static_cast<int>(std::min<long>(std::upper_bound(cdf_, cdf_ + n, uy) - cdf_, n - 1));
-  detail::prefetch_floats(cdf_ + n + static_cast<std::size_t>(s.y) * (n - 1), n - 1);
-  detail::prefetch_floats(mass_ + static_cast<std::size_t>(s.y) * n_, n);
+  detail::prefetch_floats(cdf_ + n + static_cast<std::size_t>(s.y) * (n - 1), std::min(n - 1, 128));
+  detail::prefetch_floats(mass_ + static_cast<std::size_t>(s.y) * n_, span);
   const float row_start = s.y > 0 ? cdf_[s.y - 1] : 0.0f;
   const float row_end = cdf_[s.y];
   const float row_mass = row_end - row_start;
