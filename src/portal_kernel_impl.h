@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Internal: the portal view's per-cell estimate (envpis/portals.h), one body for `float` (the
-// sub-cells, PortalView::cone_fraction) and for every SIMD width (the top cells against one seen
-// portal, PortalView::prepare through the kernel table). Included per instruction set inside
+// Internal: the portal view's per-cell estimate (envpis/portals.h), one body for `float` (the scalar
+// reference) and for every SIMD width: the top cells in PortalView::prepare and one cell's sub-cells in
+// PortalView::subcell_fractions, through the kernel table. Included per instruction set inside
 // ENVPIS_KERNEL_NS (see simd_ops.h).
 #pragma once
 

@@ -91,34 +91,43 @@ PortalEstimate parse_portal_estimate(const std::string& s) {
   throw Error("unknown portal estimate '" + s + "' (cone, grid)");
 }
 
+void PortalView::ConeArrays::assign(std::size_t padded) {
+  for (auto* a : {&ax, &ay, &az, &inv_sin, &cos, &sin}) a->assign(padded, 0.0f);
+  big.assign(padded, -64.0f);  // padding: never near, never in
+  out_thr.assign(padded, 1.0f);
+  in_thr.assign(padded, 2.0f);
+}
+
+void PortalView::ConeArrays::set(std::size_t i, const Cone& k) {
+  ax[i] = k.axis.x, ay[i] = k.axis.y, az[i] = k.axis.z;
+  const bool small = k.cos_half_angle > 0.0f && k.sin_half_angle > 0.0f;  // else never in or out
+  inv_sin[i] = small ? 1.0f / k.sin_half_angle : 0.0f;
+  out_thr[i] = small ? -(k.sin_half_angle + kMargin) : -2.0f;
+  in_thr[i] = small ? k.sin_half_angle + kMargin : 2.0f;
+  cos[i] = small ? k.cos_half_angle : 0.0f;
+  sin[i] = small ? k.sin_half_angle : 0.0f;
+  big[i] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
+}
+
 PortalView::PortalView(const ImportanceTable& table, const Portals& portals, const PortalViewOptions& options)
     : table_(&table), portals_(portals), options_(options), kernels_(&detail::kernels_for(options.simd)) {
   if (options.grid < 1 || options.grid > 16) throw Error("portal grid must be in 1..16");
-  const int T = table.top_resolution(), cells = table.cell_count();
+  const int T = table.top_resolution(), cells = table.cell_count(), S = table.subdivision();
   const std::size_t padded = static_cast<std::size_t>(table.top_level().padded_size());
   v_.assign(padded, 0.0f);
+  full_.assign(padded, 0.0f);
   seen_.reserve(static_cast<std::size_t>(Portals::kMaxPortals));
   for (int i = 0; i < portals.size(); ++i) {
     const Quad& q = portals.quad(i);
     sizes_.push_back(std::max(length(q.v[2] - q.v[0]), length(q.v[3] - q.v[1])));
   }
-  for (auto* a : {&ax_, &ay_, &az_, &inv_sin_, &out_thr_, &in_thr_, &cos_, &sin_, &big_, &full_})
-    a->assign(padded, 0.0f);
-  for (int c = 0; c < cells; ++c) {
-    const Cone& k = table.cell_cone(c);
-    ax_[c] = k.axis.x, ay_[c] = k.axis.y, az_[c] = k.axis.z;
-    const bool small = k.cos_half_angle > 0.0f && k.sin_half_angle > 0.0f;  // else never in or out
-    inv_sin_[c] = small ? 1.0f / k.sin_half_angle : 0.0f;
-    out_thr_[c] = small ? -(k.sin_half_angle + kMargin) : -2.0f;
-    in_thr_[c] = small ? k.sin_half_angle + kMargin : 2.0f;
-    cos_[c] = small ? k.cos_half_angle : 0.0f;
-    sin_[c] = small ? k.sin_half_angle : 0.0f;
-    big_[c] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
-  }
-  for (std::size_t c = static_cast<std::size_t>(cells); c < padded; ++c) {  // padding: never near, never in
-    big_[c] = -64.0f;
-    out_thr_[c] = 1.0f;
-    in_thr_[c] = 2.0f;
+  top_.assign(padded);
+  for (int c = 0; c < cells; ++c) top_.set(static_cast<std::size_t>(c), table.cell_cone(c));
+  if (S > 1) {  // the sub-cells run through the same kernel, one cell's S^2 (padded to 16) at a time
+    sub_stride_ = (static_cast<std::size_t>(S) * S + 15) / 16 * 16;
+    sub_.assign(sub_stride_ * static_cast<std::size_t>(cells));
+    for (int c = 0; c < cells; ++c)
+      for (int s = 0; s < S * S; ++s) sub_.set(static_cast<std::size_t>(c) * sub_stride_ + s, table.subcell_cone(c, s));
   }
   if (options.estimate != PortalEstimate::Grid) return;
   const int K = options.grid;
@@ -189,14 +198,15 @@ bool PortalView::prepare(Vec3 p) {
 // others the four planes. Every cell is computed (masked, not skipped): at 16 lanes that is cheaper than
 // finding the few near ones and gathering them (docs/portals.md, measured). It writes every v_ and
 // full_, so they need no clearing.
-void PortalView::cone_pass() {
-  const detail::PortalCellArrays cells{ax_.data(),  ay_.data(),      az_.data(),      cos_.data(),          sin_.data(),
-                                       big_.data(), inv_sin_.data(), out_thr_.data(), in_thr_.data(),
-                                       static_cast<int>(v_.size())};
+bool PortalView::shares(const ConeArrays& a, std::size_t offset, int count, float* v, float* full) const {
+  const detail::PortalCellArrays cells{a.ax.data() + offset,      a.ay.data() + offset,      a.az.data() + offset,
+                                       a.cos.data() + offset,     a.sin.data() + offset,     a.big.data() + offset,
+                                       a.inv_sin.data() + offset, a.out_thr.data() + offset, a.in_thr.data() + offset,
+                                       count};
   detail::PortalPlanes planes[Portals::kMaxPortals];
-  int count = 0;
+  int n = 0;
   for (const Seen& s : seen_) {
-    detail::PortalPlanes& p = planes[count++];
+    detail::PortalPlanes& p = planes[n++];
     std::memcpy(p.n, s.n, sizeof p.n);
     std::memcpy(p.g, s.g, sizeof p.g);
     p.cos_p = s.cos_p;
@@ -204,8 +214,10 @@ void PortalView::cone_pass() {
     p.near_bias = s.wide ? 16.0f : kMargin;  // a wide bounding cone bounds nothing: every cell near
     p.min_partial = kMinPartial;
   }
-  visible_ = kernels_->portal_shares(cells, planes, count, v_.data(), full_.data());
+  return kernels_->portal_shares(cells, planes, n, v, full);
 }
+
+void PortalView::cone_pass() { visible_ = shares(top_, 0, static_cast<int>(v_.size()), v_.data(), full_.data()); }
 
 unsigned PortalView::classify(const Cone& cone, bool& inside) const {
   const bool small = cone.cos_half_angle > 0.0f && cone.sin_half_angle > 0.0f;
@@ -225,20 +237,6 @@ unsigned PortalView::classify(const Cone& cone, bool& inside) const {
     if (!out) partial |= 1u << i;
   }
   return partial;
-}
-
-float PortalView::cone_fraction(const Cone& cone) const {
-  const bool small = cone.cos_half_angle > 0.0f && cone.sin_half_angle > 0.0f;  // as for the top cells
-  const float inv_sin = small ? 1.0f / cone.sin_half_angle : 0.0f;
-  const float out_thr = small ? -(cone.sin_half_angle + kMargin) : -2.0f;
-  const float in_thr = small ? cone.sin_half_angle + kMargin : 2.0f;
-  float v = 0;
-  for (const Seen& s : seen_) {
-    v += detail::scalar::cone_plane_share(s.n, cone.axis.x, cone.axis.y, cone.axis.z, inv_sin, out_thr, in_thr,
-                                          kMinPartial);
-    if (v >= 1.0f) return 1.0f;
-  }
-  return v;
 }
 
 // The share of `count` directions that pass through one of the portals in `mask` (the edge planes
@@ -279,28 +277,29 @@ bool PortalView::subcell_fractions(int c, float* out) const {
     out[0] = v_[static_cast<std::size_t>(c)];
     return out[0] > 0.0f;
   }
+  if (!(v_[static_cast<std::size_t>(c)] > 0.0f)) {
+    std::fill(out, out + S * S, 0.0f);
+    return false;
+  }
+  if (options_.estimate == PortalEstimate::Cone) {  // the top cells' kernel over the cell's sub-cells
+    float v[64], full[64];  // sub_stride_ <= 64 (S <= 8)
+    const bool any = shares(sub_, static_cast<std::size_t>(c) * sub_stride_, static_cast<int>(sub_stride_), v, full);
+    std::copy(v, v + S * S, out);
+    return any;
+  }
   bool any = false;
-  const bool grid = options_.estimate == PortalEstimate::Grid;
   const int g = std::max(2, options_.grid / S);
   Vec3 dirs[16 * 16];
   for (int s = 0; s < S * S; ++s) {
-    out[s] = 0.0f;
-    if (!(v_[static_cast<std::size_t>(c)] > 0.0f)) continue;
-    const Cone& cone = table_->subcell_cone(c, s);
-    if (!grid) {
-      out[s] = cone_fraction(cone);
-    } else {
-      bool inside = false;
-      const unsigned partial = classify(cone, inside);
-      if (inside) {
-        out[s] = 1.0f;
-      } else if (partial) {
-        const float x0 = float((c % T) * S + s % S), y0 = float((c / T) * S + s / S), TS = float(T * S);
-        for (int j = 0; j < g; ++j)
-          for (int i = 0; i < g; ++i)
-            dirs[j * g + i] = equal_area_square_to_sphere({(x0 + (i + 0.5f) / g) / TS, (y0 + (j + 0.5f) / g) / TS});
-        out[s] = grid_fraction(dirs, g * g, partial);
-      }
+    bool inside = false;
+    const unsigned partial = classify(table_->subcell_cone(c, s), inside);
+    out[s] = inside ? 1.0f : 0.0f;
+    if (!inside && partial) {
+      const float x0 = float((c % T) * S + s % S), y0 = float((c / T) * S + s / S), TS = float(T * S);
+      for (int j = 0; j < g; ++j)
+        for (int i = 0; i < g; ++i)
+          dirs[j * g + i] = equal_area_square_to_sphere({(x0 + (i + 0.5f) / g) / TS, (y0 + (j + 0.5f) / g) / TS});
+      out[s] = grid_fraction(dirs, g * g, partial);
     }
     any = any || out[s] > 0.0f;
   }

@@ -170,25 +170,34 @@ TEST(Portals, CellFractionsAreZeroOnlyWhereNoPortalIs) {
   }
 }
 
-// The top cells' pass runs in the kernel of PortalViewOptions::simd: every instruction set this CPU
+// The top cells' and the sub-cells' pass run in the kernel of PortalViewOptions::simd: every instruction set this CPU
 // runs gives the scalar reference's fractions (up to FMA round-off) and keeps V > 0 wherever a
 // direction passes a portal.
 TEST(Portals, EverySimdGivesTheScalarFractions) {
-  const auto t = table(1);
   std::mt19937_64 rng(12);
-  for (Simd simd : {Simd::SSE2, Simd::AVX2, Simd::AVX512}) {
-    if (!simd_supported(simd)) continue;
-    for (const Scene& s : scenes()) {
-      PortalView ref(*t, Portals(s.quads), {PortalEstimate::Cone, 4, Simd::Scalar});
-      PortalView view(*t, Portals(s.quads), {PortalEstimate::Cone, 4, simd});
-      ASSERT_EQ(ref.prepare(s.p), view.prepare(s.p)) << s.label;
-      for (int c = 0; c < t->cell_count(); ++c) {
-        ASSERT_NEAR(view.cell_fraction(c), ref.cell_fraction(c), 1e-4f) << s.label << " " << to_string(simd);
-        ASSERT_EQ(view.cell_fraction(c) > 0.0f, ref.cell_fraction(c) > 0.0f) << s.label << " " << to_string(simd);
-      }
-      for (int i = 0; i < 5000; ++i) {
-        const Vec3 d = random_direction(rng);
-        if (view.passes(d)) ASSERT_GT(view.cell_fraction(t->cell_of(equal_area_sphere_to_square(d))), 0.0f);
+  for (int S : {1, 3, 8}) {  // sub-cells padded to 16 lanes (S = 3) and four vectors of them (S = 8)
+    const auto t = table(S);
+    for (Simd simd : {Simd::SSE2, Simd::AVX2, Simd::AVX512}) {
+      if (!simd_supported(simd)) continue;
+      for (const Scene& s : scenes()) {
+        const std::string label = s.label + " S=" + std::to_string(S) + " " + to_string(simd);
+        PortalView ref(*t, Portals(s.quads), {PortalEstimate::Cone, 4, Simd::Scalar});
+        PortalView view(*t, Portals(s.quads), {PortalEstimate::Cone, 4, simd});
+        ASSERT_EQ(ref.prepare(s.p), view.prepare(s.p)) << label;
+        float a[64], b[64];
+        for (int c = 0; c < t->cell_count(); ++c) {
+          ASSERT_NEAR(view.cell_fraction(c), ref.cell_fraction(c), 1e-4f) << label;
+          ASSERT_EQ(view.cell_fraction(c) > 0.0f, ref.cell_fraction(c) > 0.0f) << label;
+          ASSERT_EQ(view.subcell_fractions(c, a), ref.subcell_fractions(c, b)) << label;
+          for (int k = 0; k < S * S; ++k) {
+            ASSERT_NEAR(a[k], b[k], 1e-4f) << label << " cell " << c << " sub-cell " << k;
+            ASSERT_EQ(a[k] > 0.0f, b[k] > 0.0f) << label << " cell " << c << " sub-cell " << k;
+          }
+        }
+        for (int i = 0; i < 5000; ++i) {
+          const Vec3 d = random_direction(rng);
+          if (view.passes(d)) ASSERT_GT(view.cell_fraction(t->cell_of(equal_area_sphere_to_square(d))), 0.0f);
+        }
       }
     }
   }

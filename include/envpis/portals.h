@@ -132,10 +132,18 @@ class PortalView {
     float cos_p, sin_p;
     bool wide;         // wider than 90 degrees: no use as a bound
   };
+  // Cones as padded arrays for the kernel (src/kernels.h, PortalCellArrays).
+  struct ConeArrays {
+    std::vector<float> ax, ay, az, inv_sin, out_thr, in_thr, cos, sin, big;
+    void assign(std::size_t padded);
+    void set(std::size_t i, const Cone& k);
+  };
   // Bit i set: cone not outside seen portal i; `inside`: inside one of them.
   unsigned classify(const Cone& cone, bool& inside) const;
-  float cone_fraction(const Cone& cone) const;
   float grid_fraction(const Vec3* dirs, int count, unsigned mask) const;
+  // The kernel's fractions of `count` cones of `a` from `offset` on (count a multiple of 16) into v and
+  // full; whether any is positive.
+  bool shares(const ConeArrays& a, std::size_t offset, int count, float* v, float* full) const;
   void cone_pass();
   void grid_pass();
 
@@ -146,9 +154,9 @@ class PortalView {
   std::vector<Seen> seen_;  // the portals p sees (not edge-on)
   std::vector<float> sizes_;  // per portal: its longer diagonal (the scale of the edge-on test)
   std::vector<float> v_;    // V[c], padded like the table's top level
-  // The top cells' cones as padded arrays for the kernel (src/kernels.h, PortalCellArrays).
-  std::vector<float> ax_, ay_, az_, inv_sin_, out_thr_, in_thr_;
-  std::vector<float> cos_, sin_, big_;
+  ConeArrays top_;              // the top cells, padded like the table's top level
+  ConeArrays sub_;              // every cell's sub-cells, sub_stride_ per cell (S > 1)
+  std::size_t sub_stride_ = 0;  // S^2 rounded up to a multiple of 16 (<= 64)
   std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
   const detail::Kernels* kernels_;  // the instruction set options.simd names
   std::vector<Vec3> grid_dirs_;  // Grid: K^2 directions per top cell, cell-major
