@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <string>
+#include <utility>
 
 #include "envpis/equal_area.h"
 #include "kernels.h"
@@ -109,6 +112,24 @@ void PortalView::ConeArrays::set(std::size_t i, const Cone& k) {
   big[i] = small ? 0.0f : 4.0f;  // a cone of 90 degrees or more: always near
 }
 
+// The sub-cells' arrays depend on the grid alone (T, S: the table's cones, src/cell_cones.h), so views
+// share them as tables share their cones: one copy per grid while a view holds it.
+std::shared_ptr<const PortalView::ConeArrays> PortalView::subcell_arrays(const ImportanceTable& table,
+                                                                          std::size_t stride) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::weak_ptr<const ConeArrays>> made;
+  const std::pair<int, int> grid{table.top_resolution(), table.subdivision()};
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (auto held = made[grid].lock()) return held;
+  auto a = std::make_shared<ConeArrays>();
+  const int cells = table.cell_count(), per = table.subdivision() * table.subdivision();
+  a->assign(stride * static_cast<std::size_t>(cells));
+  for (int c = 0; c < cells; ++c)
+    for (int s = 0; s < per; ++s) a->set(static_cast<std::size_t>(c) * stride + s, table.subcell_cone(c, s));
+  made[grid] = a;
+  return a;
+}
+
 PortalView::PortalView(const ImportanceTable& table, const Portals& portals, const PortalViewOptions& options)
     : table_(&table), portals_(portals), options_(options), kernels_(&detail::kernels_for(options.simd)) {
   if (options.grid < 1 || options.grid > 16) throw Error("portal grid must be in 1..16");
@@ -125,9 +146,7 @@ PortalView::PortalView(const ImportanceTable& table, const Portals& portals, con
   for (int c = 0; c < cells; ++c) top_.set(static_cast<std::size_t>(c), table.cell_cone(c));
   if (S > 1) {  // the sub-cells run through the same kernel, one cell's S^2 (padded to 16) at a time
     sub_stride_ = (static_cast<std::size_t>(S) * S + 15) / 16 * 16;
-    sub_.assign(sub_stride_ * static_cast<std::size_t>(cells));
-    for (int c = 0; c < cells; ++c)
-      for (int s = 0; s < S * S; ++s) sub_.set(static_cast<std::size_t>(c) * sub_stride_ + s, table.subcell_cone(c, s));
+    sub_ = subcell_arrays(table, sub_stride_);
   }
   if (options.estimate != PortalEstimate::Grid) return;
   const int K = options.grid;
@@ -283,7 +302,7 @@ bool PortalView::subcell_fractions(int c, float* out) const {
   }
   if (options_.estimate == PortalEstimate::Cone) {  // the top cells' kernel over the cell's sub-cells
     float v[64], full[64];  // sub_stride_ <= 64 (S <= 8)
-    const bool any = shares(sub_, static_cast<std::size_t>(c) * sub_stride_, static_cast<int>(sub_stride_), v, full);
+    const bool any = shares(*sub_, static_cast<std::size_t>(c) * sub_stride_, static_cast<int>(sub_stride_), v, full);
     std::copy(v, v + S * S, out);
     return any;
   }

@@ -36,6 +36,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -138,6 +139,7 @@ class PortalView {
     void assign(std::size_t padded);
     void set(std::size_t i, const Cone& k);
   };
+  static std::shared_ptr<const ConeArrays> subcell_arrays(const ImportanceTable& table, std::size_t stride);
   // Bit i set: cone not outside seen portal i; `inside`: inside one of them.
   unsigned classify(const Cone& cone, bool& inside) const;
   float grid_fraction(const Vec3* dirs, int count, unsigned mask) const;
@@ -155,7 +157,9 @@ class PortalView {
   std::vector<float> sizes_;  // per portal: its longer diagonal (the scale of the edge-on test)
   std::vector<float> v_;    // V[c], padded like the table's top level
   ConeArrays top_;              // the top cells, padded like the table's top level
-  ConeArrays sub_;              // every cell's sub-cells, sub_stride_ per cell (S > 1)
+  // Every cell's sub-cells, sub_stride_ per cell (S > 1): a function of the grid alone, shared by
+  // every view on a T x S grid (a product cache holds one view per slot).
+  std::shared_ptr<const ConeArrays> sub_;
   std::size_t sub_stride_ = 0;  // S^2 rounded up to a multiple of 16 (<= 64)
   std::vector<float> full_;  // per cell: 1 when a portal holds its whole cone
   const detail::Kernels* kernels_;  // the instruction set options.simd names
