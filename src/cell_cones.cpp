@@ -3,12 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <mutex>
-#include <utility>
 
 #include "envpis/equal_area.h"
 #include "parallel.h"
+#include "shared_per_grid.h"
 
 namespace envpis::detail {
 
@@ -84,20 +82,7 @@ std::shared_ptr<const CellCones> compute(int T, int S) {
 }  // namespace
 
 std::shared_ptr<const CellCones> cell_cones(int T, int S) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, int>, std::weak_ptr<const CellCones>> made;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (auto held = made[{T, S}].lock()) return held;
-  }
-  // Computed without the lock: a task that waits for a lock inside a parallel region can be the one the
-  // lock's holder needs (TBB lets a waiting thread take other tasks). Two callers may both compute; the
-  // values are the same, and the first one stored is shared from then on.
-  std::shared_ptr<const CellCones> cones = compute(T, S);
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (auto held = made[{T, S}].lock()) return held;
-  made[{T, S}] = cones;
-  return cones;
+  return shared_per_grid<CellCones>(T, S, [&] { return compute(T, S); });
 }
 
 }  // namespace envpis::detail

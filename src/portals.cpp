@@ -4,13 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
-#include <mutex>
 #include <string>
 #include <utility>
 
 #include "envpis/equal_area.h"
 #include "kernels.h"
+#include "shared_per_grid.h"
 
 #define ENVPIS_KERNEL_NS scalar
 #include "portal_kernel_impl.h"
@@ -113,21 +112,17 @@ void PortalView::ConeArrays::set(std::size_t i, const Cone& k) {
 }
 
 // The sub-cells' arrays depend on the grid alone (T, S: the table's cones, src/cell_cones.h), so views
-// share them as tables share their cones: one copy per grid while a view holds it.
+// share them as tables share their cones.
 std::shared_ptr<const PortalView::ConeArrays> PortalView::subcell_arrays(const ImportanceTable& table,
                                                                           std::size_t stride) {
-  static std::mutex mutex;
-  static std::map<std::pair<int, int>, std::weak_ptr<const ConeArrays>> made;
-  const std::pair<int, int> grid{table.top_resolution(), table.subdivision()};
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (auto held = made[grid].lock()) return held;
-  auto a = std::make_shared<ConeArrays>();
-  const int cells = table.cell_count(), per = table.subdivision() * table.subdivision();
-  a->assign(stride * static_cast<std::size_t>(cells));
-  for (int c = 0; c < cells; ++c)
-    for (int s = 0; s < per; ++s) a->set(static_cast<std::size_t>(c) * stride + s, table.subcell_cone(c, s));
-  made[grid] = a;
-  return a;
+  return detail::shared_per_grid<ConeArrays>(table.top_resolution(), table.subdivision(), [&] {
+    auto a = std::make_shared<ConeArrays>();
+    const int cells = table.cell_count(), per = table.subdivision() * table.subdivision();
+    a->assign(stride * static_cast<std::size_t>(cells));
+    for (int c = 0; c < cells; ++c)
+      for (int s = 0; s < per; ++s) a->set(static_cast<std::size_t>(c) * stride + s, table.subcell_cone(c, s));
+    return std::shared_ptr<const ConeArrays>(std::move(a));
+  });
 }
 
 PortalView::PortalView(const ImportanceTable& table, const Portals& portals, const PortalViewOptions& options)

@@ -170,9 +170,9 @@ TEST(Portals, CellFractionsAreZeroOnlyWhereNoPortalIs) {
   }
 }
 
-// The top cells' and the sub-cells' pass run in the kernel of PortalViewOptions::simd: every instruction set this CPU
-// runs gives the scalar reference's fractions (up to FMA round-off) and keeps V > 0 wherever a
-// direction passes a portal.
+// The top cells' and the sub-cells' pass run in the kernel of PortalViewOptions::simd: every
+// instruction set this CPU runs gives the scalar reference's fractions (up to FMA round-off) and keeps
+// V > 0 wherever a direction passes a portal.
 TEST(Portals, EverySimdGivesTheScalarFractions) {
   std::mt19937_64 rng(12);
   for (int S : {1, 3, 8}) {  // sub-cells padded to 16 lanes (S = 3) and four vectors of them (S = 8)

@@ -186,11 +186,12 @@ inline CumulativeDistribution2DView::Sample CumulativeDistribution2DView::sample
   // Each binary search would wait on one cache line after another; loading all of a search's lines
   // at once lets the misses overlap (the fine level is megabytes, mostly beyond L2). Up to 8 lines
   // each: a longer search touches only a few of its lines.
-  const int span = std::min(n, 128);
+  constexpr int kMaxPrefetch = 128;  // floats: 8 cache lines
+  const int span = std::min(n, kMaxPrefetch);
   detail::prefetch_floats(cdf_, span);
   Sample s;
   s.y = static_cast<int>(std::min<long>(std::upper_bound(cdf_, cdf_ + n, uy) - cdf_, n - 1));
-  detail::prefetch_floats(cdf_ + n + static_cast<std::size_t>(s.y) * (n - 1), std::min(n - 1, 128));
+  detail::prefetch_floats(cdf_ + n + static_cast<std::size_t>(s.y) * (n - 1), std::min(n - 1, kMaxPrefetch));
   detail::prefetch_floats(mass_ + static_cast<std::size_t>(s.y) * n_, span);
   const float row_start = s.y > 0 ? cdf_[s.y - 1] : 0.0f;
   const float row_end = cdf_[s.y];
