@@ -57,6 +57,40 @@ HitMaterial resolve_material(const Scene& scene, SurfaceHit* hit, Material* scra
   return out;
 }
 
+/// What the light and the BSDF sample at one path vertex share.
+struct Integrator::Vertex {
+  const SurfaceHit& hit;
+  const ShadingNormals& sn;
+  const Frame& frame;
+  Vec3 wo, wo_l;
+  const Material& bsdf;
+  bool transmissive;
+  int depth;
+  Rgb beta;  // the path's throughput up to this vertex
+};
+
+Rgb Integrator::light_sample(const Vertex& v, const DirectionSample& ls, const LightSampler& light,
+                             const PathRegularizer& reg, FireflyRecorder* log) const {
+  if (!(ls.pdf > 0) || !std::isfinite(ls.pdf) || !is_valid_direction(ls.direction)) return {};
+  const Vec3 wi = ls.direction;
+  const Vec3 wi_l = v.frame.to_local(wi);
+  if (!direction_counts(wi, wi_l.z, v.sn, v.transmissive)) return {};
+  // At the texture coordinate the sampler computed, when it did (no second look-up of wi); fetched
+  // while the BSDF is evaluated.
+  const Point2 tex = std::isfinite(ls.texture.x) ? ls.texture : env_.texture_coord(wi);
+  env_.prefetch(tex);
+  const Rgb f = v.bsdf.eval(v.wo_l, wi_l) * std::fabs(wi_l.z);
+  if (is_black(f)) return {};
+  const Rgb Le = env_.eval_texture(tex);
+  if (is_black(Le) || scene_.occluded(offset_ray_origin(v.hit.p, v.hit.ng, wi), wi)) return {};
+  const float w = light.uses_mis() ? mis_weight(ls.pdf, v.bsdf.pdf(v.wo_l, wi_l)) : 1.0f;
+  const Rgb c = reg.clamp(v.beta * f * Le * (w / ls.pdf), v.depth == 0);
+  if (log && log->exceeds(c.average()))
+    log->record({SampleTechnique::Light, v.depth, v.hit.object, c, Le, f, v.beta, wi, ls.pdf, v.bsdf.pdf(v.wo_l, wi_l), w},
+                light);
+  return c;
+}
+
 Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light, FireflyRecorder* log,
                    Rgb* light_part) const {
   Rgb L{0, 0, 0};
@@ -81,72 +115,62 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     thread_local Material textured;
     const HitMaterial hm = resolve_material(scene_, &hit, &textured);
     L += reg.clamp(beta * hm.emission, depth <= 1);
-    const float cos_bent = hm.cos_bent;
     thread_local Material regularized;  // the lobes the path's regularization leaves at this vertex
     const Material& bsdf = reg.material(*hm.bsdf, &regularized);
     const ShadingNormals sn = shading_normals(hit, mat.transmissive, wo);
     const Frame frame(sn.ns);
-    const Vec3 wo_l = frame.to_local(wo);
+    const Vertex v{hit, sn, frame, wo, frame.to_local(wo), bsdf, mat.transmissive, depth, beta};
 
-    // 1. Light sample.
-    if (light.has_light_samples()) {
+    const bool lights = light.has_light_samples();
+    if (lights) {
       ShadingContext sc;
       sc.p = hit.p;
       sc.n = sn.ns;
       sc.wo = wo;
-      sc.wo_local = wo_l;
+      sc.wo_local = v.wo_l;
       sc.frame = &frame;
       sc.bsdf = &bsdf;
-      sc.cos_bent = cos_bent;
+      sc.cos_bent = hm.cos_bent;
       sc.jitter = rng.stream(static_cast<unsigned>(depth));
       sc.opaque = !mat.transmissive;
       sc.depth = depth;
       light.prepare(sc);
-      const DirectionSample ls = light.sample(u_light);
-      if (ls.pdf > 0 && std::isfinite(ls.pdf) && is_valid_direction(ls.direction)) {
-        const Vec3 wi = ls.direction;
-        const Vec3 wi_l = frame.to_local(wi);
-        if (direction_counts(wi, wi_l.z, sn, mat.transmissive)) {
-          // The radiance before the BSDF, so that its texel's memory read overlaps the BSDF's arithmetic;
-          // at the texture coordinate the sampler computed, when it did (no second look-up of wi).
-          const Rgb Le = env_.eval_texture(std::isfinite(ls.texture.x) ? ls.texture : env_.texture_coord(wi));
-          const Rgb f = bsdf.eval(wo_l, wi_l) * std::fabs(wi_l.z);
-          if (!is_black(f)) {
-            if (!is_black(Le) && !scene_.occluded(offset_ray_origin(hit.p, hit.ng, wi), wi)) {
-              const float w = light.uses_mis() ? mis_weight(ls.pdf, bsdf.pdf(wo_l, wi_l)) : 1.0f;
-              const Rgb c = reg.clamp(beta * f * Le * (w / ls.pdf), depth == 0);
-              L += c;
-              if (light_part) *light_part += c;
-              if (log && log->exceeds(c.average()))
-                log->record({SampleTechnique::Light, depth, hit.object, c, Le, f, beta, wi, ls.pdf, bsdf.pdf(wo_l, wi_l), w},
-                            light);
-            }
-          }
-        }
-      }
+    }
+    // The BSDF sample's direction before the light sample (which does not depend on it): the
+    // environment's texel there and the light density's record are fetched from memory while the
+    // light sample and both rays run, and read after the BSDF ray is traced.
+    const std::optional<BsdfSample> bs = bsdf.sample(v.wo_l, u_bsdf, u_lobe);
+    const Vec3 wi = bs ? frame.to_world(bs->wi) : Vec3{};
+    const Vec3 wi_unit = bs ? normalize(wi) : Vec3{};
+    const Point2 tex = bs ? env_.texture_coord(wi_unit) : Point2{};
+    if (bs) {
+      env_.prefetch(tex);
+      if (lights) light.prefetch_pdf(tex);
+    }
+
+    // 1. Light sample.
+    if (lights) {
+      const Rgb c = light_sample(v, light.sample(u_light), light, reg, log);
+      L += c;
+      if (light_part) *light_part += c;
     }
 
     // 2. BSDF sample: adds the environment if it escapes, otherwise continues the path.
-    const std::optional<BsdfSample> bs = bsdf.sample(wo_l, u_bsdf, u_lobe);
     if (!bs || !(bs->pdf > 0) || !is_finite(bs->weight) || is_black(bs->weight)) break;
-    const Vec3 wi = frame.to_world(bs->wi);
     if (!is_valid_direction(wi)) break;
     if (!direction_counts(wi, bs->wi.z, sn, mat.transmissive)) break;
     const Rgb beta_next = beta * bs->weight;
-    Ray next{offset_ray_origin(hit.p, hit.ng, wi), normalize(wi), kInfinity};
-    // The environment's radiance along the ray before the ray is traced, so that its texel's memory read
-    // overlaps the traversal (wasted where the ray hits something); one look-up for it and the pdf.
-    const Point2 tex = env_.texture_coord(next.direction);
+    Ray next{offset_ray_origin(hit.p, hit.ng, wi), wi_unit, kInfinity};
     const Rgb Le = light.bsdf_hits_count() ? env_.eval_texture(tex) : Rgb{};
     SurfaceHit next_hit;
     if (!scene_.intersect(next, &next_hit)) {
       if (light.bsdf_hits_count()) {
         float w = 1.0f;
-        if (light.uses_mis() && light.has_light_samples()) w = mis_weight(bs->pdf, light.pdf(next.direction, tex));
+        if (light.uses_mis() && lights) w = mis_weight(bs->pdf, light.pdf(next.direction, tex));
         const Rgb c = reg.clamp(beta_next * Le * w, depth == 0);
         L += c;
         if (log && log->exceeds(c.average())) {
-          const float light_pdf = light.has_light_samples() ? light.pdf(next.direction) : 0.0f;
+          const float light_pdf = lights ? light.pdf(next.direction) : 0.0f;
           log->record({SampleTechnique::Bsdf, depth, hit.object, c, Le, bs->weight * bs->pdf, beta, next.direction, light_pdf,
                        bs->pdf, w},
                       light);

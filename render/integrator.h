@@ -92,7 +92,11 @@ class Integrator {
   const IntegratorOptions& options() const { return options_; }
 
  private:
+  struct Vertex;
   float mis_weight(float pdf_f, float pdf_g) const;
+  /// The light sample `ls`'s contribution at vertex v (0 when it counts for nothing).
+  Rgb light_sample(const Vertex& v, const DirectionSample& ls, const LightSampler& light, const PathRegularizer& reg,
+                   FireflyRecorder* log) const;
   const Scene& scene_;
   const EnvironmentMap& env_;
   IntegratorOptions options_;

@@ -392,6 +392,21 @@ float LightSampler::pdf(Vec3 wi, Point2 texture) const {
   return 0;
 }
 
+void LightSampler::prefetch_pdf(Point2 texture) const {
+  switch (strategy_) {
+    case Strategy::Env:
+    case Strategy::Mis:
+    case Strategy::MisComp:
+      if (table_) table_->prefetch(texture);
+      break;
+    case Strategy::Product:
+      if (product_) product_->table().prefetch(texture);
+      else if (elsewhere_) elsewhere_->prefetch(texture);
+      break;
+    default: break;  // the oracle's and the portal strategies' densities read other memory
+  }
+}
+
 float LightSampler::pdf_texel(int x, int y, int n) const {
   auto on_grid = [n](const ImportanceTable* t) {
     return t && t->fine_texels() == FineTexels::EqualArea && t->fine_resolution() == n;

@@ -206,6 +206,8 @@ class LightSampler {
   /// The same, given wi's texture coordinate in the environment map the tables were built from
   /// (EnvironmentMap::texture_coord): the table's pdf then does not look wi up again.
   float pdf(Vec3 wi, Point2 texture) const;
+  /// Starts fetching what pdf(wi, texture) will read (after prepare(); a hint, no result changes).
+  void prefetch_pdf(Point2 texture) const;
   /// pdf() at the direction of equal-area point p, given p (ImportanceTable::pdf_square): for a
   /// quadrature over the square's texels.
   float pdf_square(Point2 p) const;

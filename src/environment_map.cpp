@@ -190,6 +190,14 @@ Rgb EnvironmentMap::eval_texture(Point2 uv) const {
   return layout_ == MapLayout::EqualArea ? bilinear_equal_area(uv.x, uv.y) : bilinear_latlong(uv.x, uv.y);
 }
 
+void EnvironmentMap::prefetch(Point2 uv) const {
+  const TexelCoord t = texel_coord(uv);
+  const float* p = &pixels_[(static_cast<std::size_t>(t.y) * width_ + t.x) * 3];
+  __builtin_prefetch(p);
+  // A bilinear look-up also reads the next row (the texel beside lies on the same or the next line).
+  if (filter_ != MapFilter::Nearest && t.y + 1 < height_) __builtin_prefetch(p + std::size_t(width_) * 3);
+}
+
 Point2 EnvironmentMap::texture_coord(Vec3 d) const {
   if (!is_valid_direction(d)) return {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN()};
   const Vec3 m = to_map(d);

@@ -471,6 +471,10 @@ float ImportanceTable::pdf(const DiscreteDistribution2D& top, Vec3 d, Point2 tex
   return pdf_square(top, equal_area_sphere_to_square(d), sub);
 }
 
+void ImportanceTable::prefetch(Point2 texture) const {
+  if (map_texels_ && std::isfinite(texture.x) && std::isfinite(texture.y)) map_texels_->prefetch(texture);
+}
+
 float ImportanceTable::pdf_square(const DiscreteDistribution2D& top, Point2 p, const SubcellLevel* sub) const {
   if (empty_ || !top.valid() || !in_unit_square(p)) return 0.0f;
   if (map_texels_) return pdf(top, square_to_sphere(p), sub);  // the map's texels are not the square's

@@ -303,6 +303,7 @@ MapTexelLevel::Sample MapTexelLevel::sample(int leaf, Point2 u) const {
   const float c0 = it > entry_.data() + start_[leaf] ? it[-1].cdf : 0.0f, c1 = it->cdf;
   const float r = c1 > c0 ? clamp_unit((uy - c0) / (c1 - c0)) : 0.5f;
   const std::uint32_t t = it->texel;
+  __builtin_prefetch(&at_[t]);  // read after the direction's arithmetic
   const int x = static_cast<int>(t % static_cast<std::uint32_t>(w_)), y = static_cast<int>(t / static_cast<std::uint32_t>(w_));
   // Uniform in solid angle inside the texel: azimuth linear in u.x, cos theta linear in r (through
   // q = 1 -+ cos theta, see row_qn_). Both kept a thousandth of the texel from its edges, so that the

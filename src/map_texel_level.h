@@ -63,6 +63,8 @@ class MapTexelLevel {
   Located locate(Vec3 d) const { return locate_texture(texture_of(d)); }
   /// The same for the direction whose lat-long coordinates are `uv` (texture_of(d)).
   Located locate_texture(Point2 uv) const;
+  /// Starts fetching what locate_texture(uv) reads.
+  void prefetch(Point2 uv) const { __builtin_prefetch(&at_[static_cast<std::size_t>(texel_at(uv))]); }
   /// The lat-long coordinates world direction d reads the map at: EnvironmentMap::texture_coord(d).
   Point2 texture_of(Vec3 world) const { return direction_to_latlong(to_map_ * world); }
   /// The u that sample(locate(d).leaf, u) maps to d (up to round-off).

@@ -151,6 +151,9 @@ class EnvironmentMap {
     return {p[0], p[1], p[2]};
   }
   std::size_t bytes_used() const { return pixels_.capacity() * sizeof(float) + sizeof(*this); }
+  /// Starts fetching the texels eval_texture(uv) reads into the cache, for a caller that reads them
+  /// later (a texel of a large map is rarely in cache). A hint: it changes no result.
+  void prefetch(Point2 uv) const;
 
  private:
   EnvironmentMap() = default;

@@ -171,6 +171,9 @@ class ImportanceTable {
   /// d computes the coordinate once (eval_texture(texture) is eval(d)). sample() returns the
   /// coordinate of its direction in DirectionSample::texture when it computed it.
   float pdf(Vec3 d, Point2 texture) const { return pdf(top_, d, texture); }
+  /// Starts fetching what pdf(d, texture) reads at `texture` (as there) into the cache, for a caller
+  /// that asks later. A hint: it changes no result (and does nothing for the equal-area fine level).
+  void prefetch(Point2 texture) const;
   /// pdf(d) for d = equal_area_square_to_sphere(p), given the equal-area point p: an equal-area table
   /// locates p itself instead of mapping d back to the square (the same value but within round-off of
   /// a texel's edge). For callers that walk the square, as a quadrature over its texels does.
