@@ -161,10 +161,10 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     if (!direction_counts(wi, bs->wi.z, sn, mat.transmissive)) break;
     const Rgb beta_next = beta * bs->weight;
     Ray next{offset_ray_origin(hit.p, hit.ng, wi), wi_unit, kInfinity};
-    const Rgb Le = light.bsdf_hits_count() ? env_.eval_texture(tex) : Rgb{};
     SurfaceHit next_hit;
     if (!scene_.intersect(next, &next_hit)) {
       if (light.bsdf_hits_count()) {
+        const Rgb Le = env_.eval_texture(tex);
         float w = 1.0f;
         if (light.uses_mis() && lights) w = mis_weight(bs->pdf, light.pdf(next.direction, tex));
         const Rgb c = reg.clamp(beta_next * Le * w, depth == 0);
