@@ -191,11 +191,16 @@ Rgb EnvironmentMap::eval_texture(Point2 uv) const {
 }
 
 void EnvironmentMap::prefetch(Point2 uv) const {
-  const TexelCoord t = texel_coord(uv);
-  const float* p = &pixels_[(static_cast<std::size_t>(t.y) * width_ + t.x) * 3];
-  __builtin_prefetch(p);
-  // A bilinear look-up also reads the next row (the texel beside lies on the same or the next line).
-  if (filter_ != MapFilter::Nearest && t.y + 1 < height_) __builtin_prefetch(p + std::size_t(width_) * 3);
+  const auto fetch = [this](Point2 at) {
+    const TexelCoord t = texel_coord(at);
+    __builtin_prefetch(&pixels_[(static_cast<std::size_t>(t.y) * width_ + t.x) * 3]);
+  };
+  if (filter_ == MapFilter::Nearest) return fetch(uv);
+  // A bilinear look-up reads the rows half a texel above and below uv (the texel beside lies on the
+  // same or the next line).
+  const float half = 0.5f / float(height_);
+  fetch({uv.x, uv.y - half});
+  fetch({uv.x, uv.y + half});
 }
 
 Point2 EnvironmentMap::texture_coord(Vec3 d) const {
