@@ -14,35 +14,26 @@
 # any failure. Debian's python3 (numpy, as scripts/cycles-compare.sh).
 import argparse
 import os
-import re
 import statistics
-import subprocess
 import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-import cycles_compare as C  # noqa: E402  (the scene file and the EXR header reader, written once)
+import cycles_compare as C  # noqa: E402  (the scene file, both renders and the EXR reader, written once)
 
 
 def envpis_ms(binary, scene, env, strategy, a, out):
-    cmd = [binary, "render", "--scene", scene, "--env", env, "--env-filter", "nearest", "--integrator", "direct",
-           "--strategy", strategy, "--spp", str(a.spp), "--seed", "1", "--threads", str(a.threads), "--quiet",
-           "--out", out]
-    stdout = C.run(cmd, "envpis render " + strategy)
-    m = re.search(r"^wall seconds\s+([0-9.eE+-]+)", stdout, re.M)  # the sampling loop's, without the tables
-    if not m:
-        raise C.Failure("envpis render printed no 'wall seconds' line")
-    return float(m.group(1)) * 1000 / a.spp
+    # cycles_compare's own render (its --reuse off), wall seconds of the sampling loop without the tables
+    opts = argparse.Namespace(reuse=False, envpis=binary, sampler="sobol", threads=a.threads)
+    return C.envpis_render(opts, scene, env, strategy, a.spp, 1, out) * 1000 / a.spp
 
 
 def cycles_ms(env, alpha, a, out):
-    cmd = [a.blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-           os.path.join(HERE, "cycles_scene.py"), "--", "--map", env, "--roughness", repr(alpha ** 0.5),
-           "--size", str(a.size), "--ortho-height", repr(C.ORTHO_HEIGHT), "--threads", str(a.threads),
-           "--pattern", "PROGRESSIVE_MULTI_JITTER", "--render", "%d:1:%s" % (a.spp, out)]
-    C.run(cmd, "blender (Cycles)")
+    opts = argparse.Namespace(reuse=False, blender=a.blender, size=a.size, threads=a.threads,
+                              pattern="PROGRESSIVE_MULTI_JITTER")
+    C.cycles_renders(opts, env, alpha ** 0.5, [(a.spp, 1, out)])
     _, header = C.read_exr(out)
     return C.blender_seconds(header, out) * 1000 / a.spp
 
