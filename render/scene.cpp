@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "render/scene.h"
 
+#include "render/sphere.h"
+
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -16,6 +18,8 @@ namespace envpis::render {
 struct Scene::Embree {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  bool empty = true;         // no geometry in `scene`: every object is a direct sphere
+  std::vector<int> spheres;  // object ids of the spheres tested directly, outside Embree
 
   ~Embree() {
     if (scene) rtcReleaseScene(scene);
@@ -208,6 +212,11 @@ int Scene::add_mesh(std::string name, TriangleMesh mesh, int material) {
   return static_cast<int>(objects_.size()) - 1;
 }
 
+void Scene::set_direct_sphere_limit(int n) {
+  if (committed_) throw Error("scene: the direct sphere limit is set before commit()");
+  direct_sphere_limit_ = std::max(0, n);
+}
+
 void Scene::set_proxy_closed_surfaces(bool enable) {
   proxy_closed_surfaces_ = enable;
   if (committed_) update_closed_surface_flags();
@@ -235,8 +244,16 @@ void Scene::commit() {
   check_embree(dev, "rtcNewScene");
   rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
+  const auto sphere_count = std::count_if(objects_.begin(), objects_.end(),
+                                         [](const ObjectInfo& o) { return o.type == ObjectType::Sphere; });
+  const bool direct = sphere_count <= direct_sphere_limit_;
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     const ObjectInfo& o = objects_[i];
+    if (direct && o.type == ObjectType::Sphere) {
+      embree_->spheres.push_back(static_cast<int>(i));
+      continue;
+    }
+    embree_->empty = false;
     RTCGeometry g;
     if (o.type == ObjectType::Sphere) {
       g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_SPHERE_POINT);
@@ -276,6 +293,18 @@ void Scene::commit() {
 }
 
 bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
+  float t_sphere = ray.tmax;
+  int sphere = -1;
+  for (int i : embree_->spheres) {
+    const ObjectInfo& o = objects_[static_cast<std::size_t>(i)];
+    if (intersect_sphere(ray.origin, ray.direction, o.center, o.radius, t_sphere, &t_sphere)) sphere = i;
+  }
+  const auto direct_hit = [&] {
+    if (sphere < 0) return false;
+    sphere_hit(ray, sphere, t_sphere, hit);
+    return true;
+  };
+  if (embree_->empty) return direct_hit();
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -286,7 +315,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   rh.ray.dir_y = ray.direction.y;
   rh.ray.dir_z = ray.direction.z;
   rh.ray.tnear = 0.0f;
-  rh.ray.tfar = ray.tmax;
+  rh.ray.tfar = t_sphere;  // only what lies before the nearest direct sphere
   rh.ray.time = 0.0f;
   rh.ray.mask = 0xffffffffu;
   rh.ray.id = 0;
@@ -295,24 +324,19 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(embree_->scene, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return direct_hit();
 
   const int id = static_cast<int>(rh.hit.geomID);
   const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
-  hit->t = rh.ray.tfar;
-  hit->uv = {0, 0};
-  hit->dpdu = {0, 0, 0};
-  hit->bitangent_sign = 1;
-  hit->object = id;
-  hit->material = o.material;
   if (o.type == ObjectType::Sphere) {
-    const Vec3 p = ray.origin + ray.direction * rh.ray.tfar;
-    Vec3 n = p - o.center;
-    n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 1};
-    hit->p = o.center + n * o.radius;  // reprojected onto the sphere: less round-off than o + t d
-    hit->ng = n;
-    hit->ns = n;
+    sphere_hit(ray, id, rh.ray.tfar, hit);
   } else {
+    hit->t = rh.ray.tfar;
+    hit->uv = {0, 0};
+    hit->dpdu = {0, 0, 0};
+    hit->bitangent_sign = 1;
+    hit->object = id;
+    hit->material = o.material;
     const TriangleMesh& m = meshes_[static_cast<std::size_t>(id)];
     const std::uint32_t* tri = &m.indices[3 * static_cast<std::size_t>(rh.hit.primID)];
     const float u = rh.hit.u, v = rh.hit.v, w = 1.0f - u - v;
@@ -338,7 +362,29 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   return true;
 }
 
+void Scene::sphere_hit(const Ray& ray, int id, float t, SurfaceHit* hit) const {
+  const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
+  hit->t = t;
+  hit->uv = {0, 0};
+  hit->dpdu = {0, 0, 0};
+  hit->bitangent_sign = 1;
+  hit->object = id;
+  hit->material = o.material;
+  const Vec3 p = ray.origin + ray.direction * t;
+  Vec3 n = p - o.center;
+  n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 1};
+  hit->p = o.center + n * o.radius;  // reprojected onto the sphere: less round-off than o + t d
+  hit->ng = n;
+  hit->ns = n;
+}
+
 bool Scene::occluded(Vec3 origin, Vec3 dir, float tmax) const {
+  for (int i : embree_->spheres) {
+    const ObjectInfo& o = objects_[static_cast<std::size_t>(i)];
+    float t;
+    if (intersect_sphere(origin, dir, o.center, o.radius, tmax, &t)) return true;
+  }
+  if (embree_->empty) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay r;

@@ -128,6 +128,13 @@ class Scene {
   void set_portals(Portals portals) { portals_ = std::move(portals); }
   const Portals& portals() const { return portals_; }
 
+  /// Scenes with at most `n` spheres (default kDirectSphereLimit) test them directly, outside Embree:
+  /// for a handful of spheres that is cheaper than Embree's dispatch (BENCHMARKS.md, "Analytic
+  /// spheres outside Embree"); more go into Embree's BVH. Hits are the same up to round-off. Before
+  /// commit() only; 0 puts every sphere into Embree.
+  static constexpr int kDirectSphereLimit = 8;
+  void set_direct_sphere_limit(int n);
+
   /// Builds the Embree acceleration structure and sets each material's closed-surface flag. Throws
   /// Error when there is no environment, no object or Embree fails.
   void commit();
@@ -159,6 +166,8 @@ class Scene {
   void update_closed_surface_flags();
   static std::vector<FaceTangent> face_tangents(const TriangleMesh& m, const std::vector<Vec3>& fn);
   bool committed_ = false;
+  int direct_sphere_limit_ = kDirectSphereLimit;
+  void sphere_hit(const Ray& ray, int id, float t, SurfaceHit* hit) const;
 };
 
 }  // namespace envpis::render
