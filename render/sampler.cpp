@@ -34,7 +34,7 @@ const std::uint32_t* nibble_tables(int dim) {
           std::uint32_t x = 0;
           for (int b = 0; b < 4; ++b)
             if (j & (1u << b)) x ^= v[4 * g + b];
-          t[static_cast<std::size_t>(d) * 128 + 16 * g + j] = x;
+          t[static_cast<std::size_t>(d) * 128 + 16 * g + j] = reverse_bits(x);
         }
     }
     return t;

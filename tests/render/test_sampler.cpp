@@ -56,6 +56,22 @@ TEST(Sobol, TablesMatchTheColumnsForFullWordIndices) {
   EXPECT_EQ(sobol::sample_dim(0xffffffffu, 0), 0xffffffffu);  // van der Corput of all ones
 }
 
+TEST(Sobol, ScrambledDimensionIsTheScrambleOfThePoint) {
+  // scrambled_dim reads the points bit-reversed to save two reversals: it must equal the nested
+  // uniform scramble of the plain point, bit for bit; reverse_bits must be an involution that
+  // reverses (bit k to bit 31 - k).
+  std::uint64_t state = 0x2545f4914f6cdd1dULL;
+  for (int n = 0; n < 20000; ++n) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    const auto i = static_cast<std::uint32_t>(state >> 32), seed = static_cast<std::uint32_t>(state);
+    const int d = n % sobol::kDimensions;
+    ASSERT_EQ(sobol::scrambled_dim(sobol::nibble_tables(d), i, seed), sobol::nested_uniform_scramble(sobol::sample_dim(i, d), seed))
+        << "index " << i << ", dimension " << d;
+    ASSERT_EQ(sobol::reverse_bits(sobol::reverse_bits(i)), i);
+  }
+  for (int k = 0; k < 32; ++k) EXPECT_EQ(sobol::reverse_bits(1u << k), 1u << (31 - k));
+}
+
 TEST(Sobol, ScrambleAndShuffleAreBijectionsThatKeepBlocks) {
   // The shuffle maps each aligned block of 2^m indices onto one aligned block (the property that keeps
   // prefixes stratified); the scramble is a bijection.
