@@ -104,11 +104,11 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
   Rgb beta{1, 1, 1};
   Vec3 wo = -camera_ray.direction;
   for (int depth = 0; depth < max_depth; ++depth) {
-    rng.set_dimension(kPixelDimensions + kDimensionsPerVertex * static_cast<unsigned>(depth));
+    const unsigned dims = kPixelDimensions + kDimensionsPerVertex * static_cast<unsigned>(depth);
+    rng.set_dimension(dims);
     const Point2 u_light = rng.next2d();
     const Point2 u_bsdf = rng.next2d();
     const float u_lobe = rng.next1d();
-    const float u_rr = rng.next1d();
 
     const SceneMaterial& mat = scene_.material(hit.material);
     // One material per thread for textured hits, refilled at each (no allocation once grown).
@@ -183,7 +183,8 @@ Rgb Integrator::li(const Ray& camera_ray, PixelSampler& rng, LightSampler& light
     if (depth + 1 >= max_depth) break;
     if (depth + 1 >= options_.rr_depth) {
       const float q = std::min(0.95f, max_component(beta));
-      if (!(u_rr < q)) break;
+      rng.set_dimension(dims + kRouletteDimension);  // drawn only here: most vertices never need it
+      if (!(rng.next1d() < q)) break;
       beta = beta / q;
     }
     hit = next_hit;

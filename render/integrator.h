@@ -51,6 +51,8 @@ struct IntegratorOptions {
 /// per path vertex (so a vertex's numbers do not depend on what earlier vertices consumed).
 constexpr unsigned kPixelDimensions = 2;
 constexpr unsigned kDimensionsPerVertex = 8;
+/// Within a vertex's block: light sample 0-1, BSDF sample 2-3, lobe choice 4, Russian roulette 5.
+constexpr unsigned kRouletteDimension = 5;
 
 /// The normals a hit is shaded with, seen from wo (unit, pointing away from the surface): an opaque
 /// material is two-sided, so both normals are flipped towards wo; a shading normal on the other side
