@@ -184,8 +184,9 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
                 PixelSums ps;
                 auto& [sum, sum_avg, sum_avg2, sum_light, sum_light2] = ps;
                 std::size_t next_prefix = 0;
+                const PixelSeeds seeds(options.sampler, options.seed, pix);
                 for (int s = 0; s < options.spp; ++s) {
-                  PixelSampler rng(options.sampler, options.seed, pix, static_cast<std::uint64_t>(s));
+                  PixelSampler rng(seeds, static_cast<std::uint64_t>(s));
                   const Point2 jitter = rng.next2d();
                   const Ray ray = camera.generate_ray(float(x) + jitter.x, float(y) + jitter.y);
                   if (log) log->begin_sample(x, y, s);

@@ -19,6 +19,7 @@
 // (docs/sampling.md measures where each wins).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 
@@ -33,14 +34,49 @@ enum class SamplerKind { Independent, Sobol, Padded };
 SamplerKind parse_sampler(const std::string& s);
 const char* to_string(SamplerKind k);
 
+/// What the samples of one pixel share, computed once per pixel: the pixel's key, the index
+/// shuffle's seed and the scramble seeds of the first dimensions (the pixel position and the first
+/// vertices' numbers).
+class PixelSeeds {
+ public:
+  PixelSeeds(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel)
+      : kind_(kind),
+        pixel_key_(mix64(mix64(seed + 0x632be59bd9b4e019ULL) ^ pixel)),
+        key_(mix64(pixel_key_)),
+        shuffle_seed_(static_cast<std::uint32_t>(mix64(key_ ^ 0x2545f4914f6cdd1dULL))),
+        tables_(sobol::nibble_tables(0)) {
+    for (std::uint32_t d = 0; d < kCached; ++d) x_[d] = static_cast<std::uint32_t>(scramble_key(key_, d) >> 32);
+  }
+  SamplerKind kind() const { return kind_; }
+
+  /// The per-(seed, pixel, dimension) hash from which a dimension's scrambles derive.
+  static std::uint64_t scramble_key(std::uint64_t key, std::uint32_t dim) {
+    return mix64(key + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);
+  }
+
+ private:
+  friend class PixelSampler;
+  static constexpr std::uint32_t kCached = 16;  // dimensions of the pixel and the first two vertices
+  SamplerKind kind_;
+  std::uint64_t pixel_key_;  // the pixel's hash (independent numbers add the sample index to it)
+  std::uint64_t key_;        // the Sobol samplers' key (the same for all samples of the pixel)
+  std::uint32_t shuffle_seed_;
+  const std::uint32_t* tables_;
+  std::array<std::uint32_t, kCached> x_;  // scramble(d).x of the full sequence's first dimensions
+};
+
 class PixelSampler {
  public:
-  PixelSampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, std::uint64_t sample)
-      : kind_(kind),
+  PixelSampler(const PixelSeeds& pixel, std::uint64_t sample)
+      : kind_(pixel.kind_),
         index_(static_cast<std::uint32_t>(sample)),
-        key_(mix64(mix64(mix64(seed + 0x632be59bd9b4e019ULL) ^ pixel) ^
-                   (kind == SamplerKind::Independent ? sample * 0x9e3779b97f4a7c15ULL : 0))),
-        shuffled_(sobol::nested_uniform_scramble(index_, static_cast<std::uint32_t>(mix64(key_ ^ 0x2545f4914f6cdd1dULL)))) {}
+        key_(kind_ == SamplerKind::Independent ? mix64(pixel.pixel_key_ ^ (sample * 0x9e3779b97f4a7c15ULL)) : pixel.key_),
+        shuffled_(sobol::nested_uniform_scramble(index_, pixel.shuffle_seed_)),
+        tables_(pixel.tables_),
+        x_(pixel.x_) {}
+  /// For one sample alone (tests, tools); a renderer keeps one PixelSeeds per pixel.
+  PixelSampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, std::uint64_t sample)
+      : PixelSampler(PixelSeeds(kind, seed, pixel), sample) {}
 
   float next1d() {
     const std::uint32_t d = dim_++;
@@ -74,18 +110,18 @@ class PixelSampler {
   std::uint32_t global_dimensions() const { return kind_ == SamplerKind::Padded ? 2u : std::uint32_t(sobol::kDimensions); }
   /// Uniform in [0, 1) with 24 random bits (never exactly 1).
   float independent(std::uint32_t dim) const {
-    const std::uint64_t h = mix64(key_ + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);
+    const std::uint64_t h = PixelSeeds::scramble_key(key_, dim);
     return float(h >> 40) * 0x1p-24f;
   }
   /// Dimension d of the pixel's shuffled point of the full Sobol sequence, Owen-scrambled.
   float global(std::uint32_t d) const {
-    return sobol::to_unit_float(sobol::nested_uniform_scramble(sobol::sample_dim(shuffled_, static_cast<int>(d)),
-                                                               scramble(d).x));
+    const std::uint32_t x = d < PixelSeeds::kCached ? x_[d] : scramble(d).x;
+    return sobol::to_unit_float(sobol::scrambled_dim(tables_ + 128 * d, shuffled_, x));
   }
   /// The per-(seed, pixel, dimension) scrambles: the same for all samples of the pixel, as the
   /// sequence's stratification needs.
   sobol::Scramble scramble(std::uint32_t dim) const {
-    const std::uint64_t a = mix64(key_ + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);
+    const std::uint64_t a = PixelSeeds::scramble_key(key_, dim);
     const std::uint64_t b = mix64(a ^ 0x5851f42d4c957f2dULL);
     return {static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(a >> 32), static_cast<std::uint32_t>(b)};
   }
@@ -95,6 +131,8 @@ class PixelSampler {
   std::uint64_t key_;
   std::uint32_t shuffled_;  // the sample index after the pixel's shuffle (full Sobol)
   std::uint32_t dim_ = 0;
+  const std::uint32_t* tables_;                       // sobol::nibble_tables(0)
+  std::array<std::uint32_t, PixelSeeds::kCached> x_;  // the pixel's first scramble seeds
 };
 
 }  // namespace envpis::render
