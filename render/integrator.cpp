@@ -79,15 +79,16 @@ Rgb Integrator::light_sample(const Vertex& v, const DirectionSample& ls, const L
   // while the BSDF is evaluated.
   const Point2 tex = std::isfinite(ls.texture.x) ? ls.texture : env_.texture_coord(wi);
   env_.prefetch(tex);
-  const Rgb f = v.bsdf.eval(v.wo_l, wi_l) * std::fabs(wi_l.z);
+  // f and the BSDF's pdf in one evaluation (they share the half-vector, D and the lobe choice).
+  float bsdf_pdf = 0;
+  const Rgb f = v.bsdf.eval_pdf(v.wo_l, wi_l, &bsdf_pdf) * std::fabs(wi_l.z);
   if (is_black(f)) return {};
   const Rgb Le = env_.eval_texture(tex);
   if (is_black(Le) || scene_.occluded(offset_ray_origin(v.hit.p, v.hit.ng, wi), wi)) return {};
-  const float w = light.uses_mis() ? mis_weight(ls.pdf, v.bsdf.pdf(v.wo_l, wi_l)) : 1.0f;
+  const float w = light.uses_mis() ? mis_weight(ls.pdf, bsdf_pdf) : 1.0f;
   const Rgb c = reg.clamp(v.beta * f * Le * (w / ls.pdf), v.depth == 0);
   if (log && log->exceeds(c.average()))
-    log->record({SampleTechnique::Light, v.depth, v.hit.object, c, Le, f, v.beta, wi, ls.pdf, v.bsdf.pdf(v.wo_l, wi_l), w},
-                light);
+    log->record({SampleTechnique::Light, v.depth, v.hit.object, c, Le, f, v.beta, wi, ls.pdf, bsdf_pdf, w}, light);
   return c;
 }
 
