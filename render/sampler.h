@@ -45,13 +45,20 @@ class PixelSeeds {
         key_(mix64(pixel_key_)),
         shuffle_seed_(static_cast<std::uint32_t>(mix64(key_ ^ 0x2545f4914f6cdd1dULL))),
         tables_(sobol::nibble_tables(0)) {
-    for (std::uint32_t d = 0; d < kCached; ++d) x_[d] = static_cast<std::uint32_t>(scramble_key(key_, d) >> 32);
+    for (std::uint32_t d = 0; d < kCached; ++d) x_[d] = scramble(key_, d).x;
   }
   SamplerKind kind() const { return kind_; }
 
   /// The per-(seed, pixel, dimension) hash from which a dimension's scrambles derive.
   static std::uint64_t scramble_key(std::uint64_t key, std::uint32_t dim) {
     return mix64(key + (std::uint64_t(dim) + 1) * 0x9e3779b97f4a7c15ULL);
+  }
+  /// The per-(seed, pixel, dimension) scrambles: the same for all samples of the pixel, as the
+  /// sequence's stratification needs.
+  static sobol::Scramble scramble(std::uint64_t key, std::uint32_t dim) {
+    const std::uint64_t a = scramble_key(key, dim);
+    const std::uint64_t b = mix64(a ^ 0x5851f42d4c957f2dULL);
+    return {static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(a >> 32), static_cast<std::uint32_t>(b)};
   }
 
  private:
@@ -62,7 +69,7 @@ class PixelSeeds {
   std::uint64_t key_;        // the Sobol samplers' key (the same for all samples of the pixel)
   std::uint32_t shuffle_seed_;
   const std::uint32_t* tables_;
-  std::array<std::uint32_t, kCached> x_;  // scramble(d).x of the full sequence's first dimensions
+  std::array<std::uint32_t, kCached> x_;  // scramble(key_, d).x of the full sequence's first dimensions
 };
 
 class PixelSampler {
@@ -118,13 +125,7 @@ class PixelSampler {
     const std::uint32_t x = d < PixelSeeds::kCached ? x_[d] : scramble(d).x;
     return sobol::to_unit_float(sobol::scrambled_dim(tables_ + 128 * d, shuffled_, x));
   }
-  /// The per-(seed, pixel, dimension) scrambles: the same for all samples of the pixel, as the
-  /// sequence's stratification needs.
-  sobol::Scramble scramble(std::uint32_t dim) const {
-    const std::uint64_t a = PixelSeeds::scramble_key(key_, dim);
-    const std::uint64_t b = mix64(a ^ 0x5851f42d4c957f2dULL);
-    return {static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(a >> 32), static_cast<std::uint32_t>(b)};
-  }
+  sobol::Scramble scramble(std::uint32_t dim) const { return PixelSeeds::scramble(key_, dim); }
 
   SamplerKind kind_;
   std::uint32_t index_;
