@@ -331,12 +331,7 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   if (o.type == ObjectType::Sphere) {
     sphere_hit(ray, id, rh.ray.tfar, hit);
   } else {
-    hit->t = rh.ray.tfar;
-    hit->uv = {0, 0};
-    hit->dpdu = {0, 0, 0};
-    hit->bitangent_sign = 1;
-    hit->object = id;
-    hit->material = o.material;
+    begin_hit(id, rh.ray.tfar, hit);
     const TriangleMesh& m = meshes_[static_cast<std::size_t>(id)];
     const std::uint32_t* tri = &m.indices[3 * static_cast<std::size_t>(rh.hit.primID)];
     const float u = rh.hit.u, v = rh.hit.v, w = 1.0f - u - v;
@@ -362,14 +357,18 @@ bool Scene::intersect(const Ray& ray, SurfaceHit* hit) const {
   return true;
 }
 
-void Scene::sphere_hit(const Ray& ray, int id, float t, SurfaceHit* hit) const {
-  const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
+void Scene::begin_hit(int id, float t, SurfaceHit* hit) const {
   hit->t = t;
   hit->uv = {0, 0};
   hit->dpdu = {0, 0, 0};
   hit->bitangent_sign = 1;
   hit->object = id;
-  hit->material = o.material;
+  hit->material = objects_[static_cast<std::size_t>(id)].material;
+}
+
+void Scene::sphere_hit(const Ray& ray, int id, float t, SurfaceHit* hit) const {
+  const ObjectInfo& o = objects_[static_cast<std::size_t>(id)];
+  begin_hit(id, t, hit);
   const Vec3 p = ray.origin + ray.direction * t;
   Vec3 n = p - o.center;
   n = is_valid_direction(n) ? normalize(n) : Vec3{0, 0, 1};

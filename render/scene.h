@@ -129,8 +129,8 @@ class Scene {
   const Portals& portals() const { return portals_; }
 
   /// Scenes with at most `n` spheres (default kDirectSphereLimit) test them directly, outside Embree:
-  /// for a handful of spheres that is cheaper than Embree's dispatch (BENCHMARKS.md, "Analytic
-  /// spheres outside Embree"); more go into Embree's BVH. Hits are the same up to round-off. Before
+  /// for a handful of spheres that is cheaper than Embree's dispatch (BENCHMARKS.md, "Spheres
+  /// outside Embree, the sampler's seeds per pixel"); more go into Embree's BVH. Hits are the same up to round-off. Before
   /// commit() only; 0 puts every sphere into Embree.
   static constexpr int kDirectSphereLimit = 8;
   void set_direct_sphere_limit(int n);
@@ -167,6 +167,8 @@ class Scene {
   static std::vector<FaceTangent> face_tangents(const TriangleMesh& m, const std::vector<Vec3>& fn);
   bool committed_ = false;
   int direct_sphere_limit_ = kDirectSphereLimit;
+  /// A hit's fields every object type sets alike (no texture coordinates or tangent yet).
+  void begin_hit(int id, float t, SurfaceHit* hit) const;
   void sphere_hit(const Ray& ray, int id, float t, SurfaceHit* hit) const;
 };
 
