@@ -130,8 +130,8 @@ class Scene {
 
   /// Scenes with at most `n` spheres (default kDirectSphereLimit) test them directly, outside Embree:
   /// for a handful of spheres that is cheaper than Embree's dispatch (BENCHMARKS.md, "Spheres
-  /// outside Embree, the sampler's seeds per pixel"); more go into Embree's BVH. Hits are the same up to round-off. Before
-  /// commit() only; 0 puts every sphere into Embree.
+  /// outside Embree, the sampler's seeds per pixel"); more go into Embree's BVH. Hits are the same up
+  /// to round-off. Before commit() only; 0 puts every sphere into Embree.
   static constexpr int kDirectSphereLimit = 8;
   void set_direct_sphere_limit(int n);
 
